@@ -1,0 +1,32 @@
+# One way to do each thing. `make demo` and `make test` set themselves up.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+DATA ?= ../shared/data
+STAMP := $(VENV)/.installed
+
+.PHONY: setup demo test reproduce bench clean
+
+setup: $(STAMP)
+
+$(STAMP): requirements.txt setup.py
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -r requirements.txt
+	$(PY) -m pip install --quiet --no-deps -e .
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/spatial-grounding demo --out demo_out
+
+test: $(STAMP)
+	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q test
+
+reproduce: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce --data $(DATA) --out results
+
+bench: $(STAMP)
+	$(VENV)/bin/spatial-grounding bench --out results/bench.json
+
+clean:
+	rm -rf $(VENV) build install log demo_out

@@ -1,0 +1,271 @@
+"""Grounding models: t-RNetAttn (the paper's), t-RNet, t-CNN and t-UVFA, and a registry.
+
+Every model maps (grids (B,H,W) long, tokens (B,L) long) to a value map (B,H,W), works on
+any map size, and computes all cells, all cell pairs and all words of a batch at once.
+`forward(..., return_aux=True)` also returns the relation map Z1 and (t-RNetAttn) the
+attention over words, which the ROS node publishes.
+
+Sizes are the paper's (section 3.2, appendix A); PuddleWorld numbers in comments.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from .text import PAD
+
+# The 8 neighbours j of a cell i (the paper's 1-square neighbourhood), as (d_row, d_col),
+# and l_ij, a scalar code of j's position relative to i: evenly spaced in [-1, 1].
+NEIGHBOURS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
+RELATIVE_POSITION = torch.linspace(-1.0, 1.0, len(NEIGHBOURS))
+
+
+@dataclass
+class ModelConfig:
+    """Hyper-parameters, all in one place (PuddleWorld values; ISI uses embed_dim 13)."""
+    n_entities: int = 12          # entity kinds in the table (PuddleWorld: 12)
+    vocab_size: int = 2           # words incl. <pad>, <unk>
+    embed_dim: int = 7            # k: entity embedding (13 for ISI)
+    word_dim: int = 15            # word embedding = LSTM input
+    hidden: int = 30              # LSTM hidden size
+    mlp: tuple = (10, 10)         # relation MLP hidden layers (output 1), tanh
+    uvfa_text: int = 7            # t-UVFA text vector
+    uvfa_channels: int = 16       # t-UVFA state encoder channels
+    head: tuple = (3, 6, 12, 6, 3)  # output network: 3x3 conv channels before the last conv
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["mlp"], d["head"] = list(self.mlp), list(self.head)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ModelConfig":
+        d = dict(d)
+        d["mlp"] = tuple(d.get("mlp", (10, 10)))
+        d["head"] = tuple(d.get("head", ()))
+        return cls(**d)
+
+
+def relation_param_count(cfg: ModelConfig) -> int:
+    """Size of h: weights of f (no biases, as the paper counts) plus 3 gradient coefficients.
+    (2k+1)*10 + 10*10 + 10*1 + 3 = 263 for k = 7, 383 for k = 13."""
+    sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
+    return sum(a * b for a, b in zip(sizes[:-1], sizes[1:])) + 3
+
+
+class TextEncoder(nn.Module):
+    """Word embedding -> LSTM; per-word outputs h(k), the padding mask, and their mean."""
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        self.embed = nn.Embedding(cfg.vocab_size, cfg.word_dim, padding_idx=PAD)
+        self.lstm = nn.LSTM(cfg.word_dim, cfg.hidden, batch_first=True)
+
+    def forward(self, tokens: torch.Tensor):
+        mask = tokens != PAD
+        mask[:, 0] = True  # an empty instruction still has one (unknown) word
+        words, _ = self.lstm(self.embed(tokens))
+        words = words * mask.unsqueeze(-1)
+        mean = words.sum(1) / mask.sum(1, keepdim=True)
+        return words, mask, mean
+
+
+class EntityEncoder(nn.Module):
+    """phi: an embedding per entity index, plus one learned 'off the map' entity that pads
+    the border so edge cells have 8 neighbours too."""
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        self.off_map = cfg.n_entities
+        self.embed = nn.Embedding(cfg.n_entities + 1, cfg.embed_dim)
+
+    def forward(self, grids: torch.Tensor) -> torch.Tensor:
+        """(B,H,W) -> (B,H+2,W+2,k) embeddings of the border-padded grid."""
+        return self.embed(F.pad(grids, (1, 1, 1, 1), value=self.off_map))
+
+
+def neighbour_index(height: int, width: int, device=None) -> tuple[torch.Tensor, torch.Tensor]:
+    """Flat indices into the padded (H+2)*(W+2) grid: each cell (H*W,) and its 8 neighbours (H*W, 8)."""
+    rows, cols = torch.meshgrid(torch.arange(1, height + 1, device=device),
+                                torch.arange(1, width + 1, device=device), indexing="ij")
+    centre = (rows * (width + 2) + cols).reshape(-1)
+    offsets = torch.tensor([dr * (width + 2) + dc for dr, dc in NEIGHBOURS], device=device)
+    return centre, centre[:, None] + offsets[None, :]
+
+
+def gradient_maps(height: int, width: int, device=None) -> torch.Tensor:
+    """(3, H, W): G1 horizontal (west -1 .. east +1), G2 vertical (north -1 .. south +1), J ones."""
+    g1 = torch.linspace(-1, 1, width, device=device).expand(height, width)
+    g2 = torch.linspace(-1, 1, height, device=device)[:, None].expand(height, width)
+    return torch.stack([g1, g2, torch.ones(height, width, device=device)])
+
+
+class OutputHead(nn.Module):
+    """tau: Z2 = b1*G1 + b2*G2 + b3*J, then 3x3 convolutions over [Z1; Z2] to the value map.
+
+    `channels` = () is the single convolution of the paper's text; the default stack is the
+    output network of Janner et al.'s code (SimpleConv: 3, 6, 12, 6, 3 channels, ReLU), which
+    produced the t-CNN numbers the paper compares against: its 11x11 receptive field lets a
+    goal's value spread over a 10x10 map. No final ReLU: true values go negative (puddles,
+    down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes."""
+
+    def __init__(self, channels: tuple = ()):
+        super().__init__()
+        sizes = [2, *channels, 1]
+        self.convs = nn.ModuleList(nn.Conv2d(a, b, kernel_size=3, padding=1)
+                                   for a, b in zip(sizes[:-1], sizes[1:]))
+
+    def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
+        b, h, w = z1.shape
+        z2 = torch.einsum("bc,chw->bhw", beta, gradient_maps(h, w, z1.device))
+        x = torch.stack([z1, z2], dim=1)
+        for n, conv in enumerate(self.convs):
+            x = conv(x)
+            if n < len(self.convs) - 1:
+                x = torch.relu(x)
+        return x.squeeze(1)
+
+
+class TRNet(nn.Module):
+    """Text-conditioned relation network. With attention (t-RNetAttn) the relation MLP's
+    weights are decoded from h_ij = sum_k alpha_ij(k) h(k) for each cell pair; without it
+    (t-RNet) from the mean of the LSTM outputs, the same for every pair."""
+
+    def __init__(self, cfg: ModelConfig, attention: bool = True):
+        super().__init__()
+        self.cfg, self.attention = cfg, attention
+        self.phi = EntityEncoder(cfg)
+        self.text = TextEncoder(cfg)
+        self.decoder = nn.Linear(cfg.hidden, relation_param_count(cfg))  # h -> 263
+        if attention:
+            # project h(k) to 2k dims to score it against [phi(s_i); phi(s_j)]
+            self.attn = nn.Linear(cfg.hidden, 2 * cfg.embed_dim, bias=False)
+        self.head = OutputHead(cfg.head)
+        sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
+        self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
+
+    def split_params(self, params: torch.Tensor) -> list[torch.Tensor]:
+        """Cut a parameter vector (..., 263) into the relation MLP's weights (..., out, in)."""
+        weights, start = [], 0
+        for out, inp in self.layer_shapes:
+            weights.append(params[..., start:start + out * inp].unflatten(-1, (out, inp)))
+            start += out * inp
+        return weights
+
+    @staticmethod
+    def relation_mlp(weights: list[torch.Tensor], x: torch.Tensor, per_pair: bool) -> torch.Tensor:
+        """r = W3 tanh(W2 tanh(W1 x)) over pairs x (B, N, 8, 2k+1). Weights are (B, out, in)
+        for every pair of a map, or (B, N, 8, out, in) per pair (with attention)."""
+        for n, w in enumerate(weights):
+            if per_pair:  # a tiny matrix per pair: a broadcast product beats 400k tiny matmuls
+                x = (w * x.unsqueeze(-2)).sum(-1)
+            else:
+                x = torch.einsum("bnpi,boi->bnpo", x, w)
+            if n < len(weights) - 1:
+                x = torch.tanh(x)
+        return x.squeeze(-1)
+
+    def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
+        b, h, w = grids.shape
+        k = self.cfg.embed_dim
+        centre, nbrs = neighbour_index(h, w, grids.device)
+        phi = self.phi(grids).flatten(1, 2)                      # (B, (H+2)(W+2), k)
+        phi_i = phi[:, centre]                                   # (B, N, k)
+        phi_j = phi[:, nbrs]                                     # (B, N, 8, k)
+        words, mask, mean = self.text(tokens)                    # (B, L, 30), (B, L), (B, 30)
+        word_params = self.decoder(words)                        # (B, L, 263)
+        attention = None
+        if self.attention:
+            # alpha_ij(k) ~ exp(h(k)^T A [phi_i; phi_j]); the score splits into an i part and
+            # a j part, so it costs (B, N, L) + (B, N, 8, L), not a product over all three.
+            q = self.attn(words)                                 # (B, L, 2k)
+            score = (torch.einsum("bnd,bld->bnl", phi_i, q[..., :k]).unsqueeze(2)
+                     + torch.einsum("bnpd,bld->bnpl", phi_j, q[..., k:]))
+            score = score.masked_fill(~mask[:, None, None, :], float("-inf"))
+            attention = score.softmax(-1)                        # (B, N, 8, L)
+            # the decoder is linear and sum_k alpha = 1, so decoding h_ij equals the
+            # alpha-weighted sum of the decoded words: a batched matmul per layer
+            weights = [torch.einsum("bnpl,bloi->bnpoi", attention, w)
+                       for w in self.split_params(word_params)]
+        else:
+            weights = self.split_params(self.decoder(mean))     # (B, out, in) per layer
+        rel = RELATIVE_POSITION.to(grids.device).expand(b, h * w, -1).unsqueeze(-1)
+        x = torch.cat([phi_i.unsqueeze(2).expand(-1, -1, len(NEIGHBOURS), -1), phi_j, rel], -1)
+        r = self.relation_mlp(weights, x, per_pair=self.attention)  # (B, N, 8)
+        z1 = r.max(dim=-1).values.view(b, h, w)
+        beta = self.decoder(mean)[:, -3:]                        # the last 3 entries of h
+        values = self.head(z1, beta)
+        if not return_aux:
+            return values
+        word_attention = None
+        if attention is not None:  # how much each word mattered, averaged over all pairs
+            word_attention = attention.mean(dim=(1, 2))
+        return values, {"relation_map": z1, "attention": word_attention}
+
+
+class TCNN(nn.Module):
+    """t-CNN (Janner et al. 2018 as in the paper's appendix): the text vector's first
+    3*3*k entries are a 3x3 kernel over the entity embeddings, giving Z1; the last 3 make Z2."""
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        self.cfg = cfg
+        self.phi = EntityEncoder(cfg)
+        self.text = TextEncoder(cfg)
+        self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + 3)  # 66 for k = 7
+        self.head = OutputHead(cfg.head)
+
+    def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
+        b, h, w = grids.shape
+        k = self.cfg.embed_dim
+        phi = self.phi(grids).permute(0, 3, 1, 2)                # (B, k, H+2, W+2)
+        _, _, mean = self.text(tokens)
+        vec = self.decoder(mean)
+        kernels = vec[:, :-3].view(b, k, 3, 3)
+        # one kernel per example: a grouped convolution over the batch
+        z1 = F.conv2d(phi.reshape(1, b * k, h + 2, w + 2), kernels, groups=b).view(b, h, w)
+        values = self.head(z1, vec[:, -3:])
+        return (values, {"relation_map": z1, "attention": None}) if return_aux else values
+
+
+class TUVFA(nn.Module):
+    """t-UVFA: a text vector [7] concatenated with a convolutional state encoding at every
+    cell, then deconvolution layers decode the value map."""
+
+    def __init__(self, cfg: ModelConfig):
+        super().__init__()
+        c = cfg.uvfa_channels
+        self.phi = nn.Embedding(cfg.n_entities, cfg.embed_dim)
+        self.text = TextEncoder(cfg)
+        self.to_text = nn.Linear(cfg.hidden, cfg.uvfa_text)
+        self.state = nn.Sequential(nn.Conv2d(cfg.embed_dim, c, 3, padding=1), nn.ReLU(),
+                                   nn.Conv2d(c, c, 3, padding=1), nn.ReLU())
+        self.deconv = nn.Sequential(
+            nn.ConvTranspose2d(c + cfg.uvfa_text, c, 3, padding=1), nn.ReLU(),
+            nn.ConvTranspose2d(c, 1, 3, padding=1))
+
+    def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
+        b, h, w = grids.shape
+        state = self.state(self.phi(grids).permute(0, 3, 1, 2))
+        _, _, mean = self.text(tokens)
+        text = self.to_text(mean)[:, :, None, None].expand(-1, -1, h, w)
+        values = self.deconv(torch.cat([state, text], 1)).squeeze(1)
+        aux = {"relation_map": torch.zeros_like(values), "attention": None}
+        return (values, aux) if return_aux else values
+
+
+MODELS = {
+    "t-rnet-attn": lambda cfg: TRNet(cfg, attention=True),
+    "t-rnet": lambda cfg: TRNet(cfg, attention=False),
+    "t-cnn": TCNN,
+    "t-uvfa": TUVFA,
+}
+
+
+def build_model(name: str, cfg: ModelConfig) -> nn.Module:
+    if name not in MODELS:
+        raise ValueError(f"unknown model {name!r}; use one of {', '.join(MODELS)}")
+    return MODELS[name](cfg)
