@@ -1,0 +1,106 @@
+"""The RL environment: rewards and termination come from the example's maps, moves from
+world.step_cell, and the true values never reach the observation."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spatial_grounding_ros import world
+from spatial_grounding_ros.env import GridWorldEnv, load_episodes
+from spatial_grounding_ros.generator import generate
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+
+
+@pytest.fixture(scope="module")
+def data():
+    return generate(20, seed=3, mode="mixed")
+
+
+def test_reset_observation_has_no_values(data):
+    env = GridWorldEnv(data)
+    obs, info = env.reset(seed=0)
+    assert set(obs) == {"grid", "instruction", "agent"}
+    assert obs["grid"].shape == (10, 10) and isinstance(obs["instruction"], str)
+    assert not data.terminal[info["example"]][obs["agent"]]  # never starts on the goal
+
+
+def test_walk_to_goal_collects_rewards_and_terminates(data):
+    env = GridWorldEnv(data, step_limit=100)
+    env.reset(seed=1, example=4, start=(0, 0))
+    goal = env.goal
+    expected = 0.0
+    policy = world.greedy_policy(data.values[4])  # the optimal policy reaches the goal
+    for _ in range(100):
+        a = int(policy[env.agent])
+        nxt = world.step_cell(env.agent, a, env.shape)
+        obs, reward, terminated, truncated, info = env.step(a)
+        assert obs["agent"] == nxt
+        assert reward == data.rewards[4][nxt]
+        expected += reward
+        if terminated:
+            break
+    assert terminated and not truncated and env.agent == goal
+    assert info["total_reward"] == pytest.approx(expected)
+    assert data.rewards[4][goal] >= 2.0
+    with pytest.raises(RuntimeError):
+        env.step(0)
+
+
+def test_off_map_stays_put_and_step_limit_truncates(data):
+    env = GridWorldEnv(data, step_limit=3)
+    env.reset(example=0, start=(0, 0))
+    if env.goal == (0, 0):
+        pytest.skip("goal in the corner")
+    for i in range(3):
+        obs, reward, terminated, truncated, _ = env.step(0)  # up, off the map
+        assert obs["agent"] == (0, 0)
+        assert reward == data.rewards[0][0, 0]
+    assert truncated and not terminated
+
+
+def test_puddle_reward_is_minus_one(data):
+    env = GridWorldEnv(data)
+    i = next(i for i in range(len(data)) if (data.grids[i] == 1).any())
+    cell = tuple(np.argwhere(data.grids[i] == 1)[0])
+    if data.terminal[i][cell]:
+        pytest.skip("puddle is the goal")
+    # enter the puddle cell from a neighbour
+    for a, (dr, dc) in enumerate(world.ACTIONS):
+        start = (cell[0] - dr, cell[1] - dc)
+        if 0 <= start[0] < 10 and 0 <= start[1] < 10 and not data.terminal[i][start]:
+            env.reset(example=i, start=start)
+            _, reward, _, _, _ = env.step(a)
+            assert reward == -1.0
+            return
+    pytest.skip("no free neighbour")
+
+
+def test_bad_input(data):
+    env = GridWorldEnv(data)
+    with pytest.raises(RuntimeError):
+        env.step(0)
+    env.reset(example=0)
+    with pytest.raises(ValueError):
+        env.step(4)
+    with pytest.raises(ValueError):
+        env.reset(example=len(data))
+    with pytest.raises(ValueError):
+        env.reset(example=0, start=(10, 0))
+    with pytest.raises(ValueError):
+        GridWorldEnv(data, step_limit=0)
+
+
+def test_sequential_order_and_generator_source():
+    data = load_episodes("generator-local", n=3, seed=1)
+    env = GridWorldEnv(data, order="sequential")
+    seen = [env.reset()[1]["example"] for _ in range(4)]
+    assert seen == [0, 1, 2, 0]
+
+
+@pytest.mark.skipif(not (DATA / "puddleworld").is_dir(), reason="../shared/data is absent")
+def test_puddleworld_episodes():
+    data = load_episodes("pw-local", "test", str(DATA))
+    env = GridWorldEnv(data)
+    obs, info = env.reset(seed=0)
+    assert obs["instruction"] == data.instructions[info["example"]]
