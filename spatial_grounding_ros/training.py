@@ -20,10 +20,14 @@ from .models import ModelConfig, build_model
 from .text import Vocabulary
 
 
+# Epoch budgets per task (the validation split picks the best epoch within them).
+EPOCHS = {"pw-local": 300, "pw-global": 300, "pw": 200, "isi": 40}
+
+
 @dataclass
 class TrainConfig:
     """Training hyper-parameters (the paper's: Adam, lr 1e-3, batch 512)."""
-    epochs: int = 300
+    epochs: int | None = None    # None: EPOCHS[task]
     batch_size: int = 512
     lr: float = 1e-3
     lr_final: float = 1e-4       # cosine decay to this
@@ -34,6 +38,19 @@ class TrainConfig:
 
 def encode(vocab: Vocabulary, data: GroundingSet) -> tuple[torch.Tensor, torch.Tensor]:
     return torch.from_numpy(data.grids), torch.from_numpy(vocab.encode_batch(data.instructions))
+
+
+def batches(lengths: np.ndarray, batch_size: int, rng: np.random.Generator) -> list[np.ndarray]:
+    """Shuffled batches of similar instruction length (sorted within pools of 8 batches),
+    so padding, which the per-pair attention pays for, stays short."""
+    order = rng.permutation(len(lengths))
+    pool = batch_size * 8
+    out = []
+    for i in range(0, len(order), pool):
+        chunk = order[i:i + pool]
+        chunk = chunk[np.argsort(lengths[chunk], kind="stable")]
+        out += [chunk[j:j + batch_size] for j in range(0, len(chunk), batch_size)]
+    return [out[i] for i in rng.permutation(len(out))]
 
 
 def _trim(tokens: torch.Tensor) -> torch.Tensor:
@@ -62,6 +79,7 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
                      progress: bool = True) -> tuple[Path, dict]:
     """Train `model_name` on `task`, keep the epoch with the lowest validation MSE, write
     `out/<task>_<model>.pt`; returns its path and a summary."""
+    tc = TrainConfig(**{**vars(tc), "epochs": tc.epochs or EPOCHS[task]})
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = train_data if train_data is not None else load_task(task, "train", data_dir)
@@ -75,6 +93,7 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=steps, eta_min=tc.lr_final)
     grids, tokens = encode(vocab, train)
     values = torch.from_numpy(train.values)
+    lengths = (tokens != 0).sum(1).numpy()
     rng = np.random.default_rng(tc.seed)
     best = (float("inf"), None, -1)
     history = []
@@ -82,10 +101,9 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
     bar = tqdm(range(tc.epochs), desc=f"{task} {model_name}", disable=not progress, unit="ep")
     for epoch in bar:
         model.train()
-        order = torch.from_numpy(rng.permutation(len(train)))
         losses = []
-        for i in range(0, len(order), tc.batch_size):
-            idx = order[i:i + tc.batch_size]
+        for idx in batches(lengths, tc.batch_size, rng):
+            idx = torch.from_numpy(idx)
             loss = torch.mean((model(grids[idx], _trim(tokens[idx])) - values[idx]) ** 2)
             opt.zero_grad()
             loss.backward()
@@ -102,7 +120,7 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
     val_metrics = evaluate(model, vocab, val)
     summary = {"task": task, "train_examples": len(train), "val_examples": len(val),
                "best_epoch": best[2], "epochs": tc.epochs, "train_seconds": round(train_seconds, 1),
-               "val": val_metrics, "train_config": vars(tc).copy() if hasattr(tc, "__dict__") else {}}
+               "val": val_metrics, "train_config": vars(tc).copy()}
     path = save_checkpoint(Path(out) / f"{task}_{model_name}.pt", model_name, model, cfg, vocab,
                            data.entities, task=task,
                            training_data=f"{data.name} ({len(train)} train / {len(val)} validation, by world)",

@@ -1,0 +1,154 @@
+"""`spatial-grounding`: one command, with subcommands.
+
+Bad input (missing or corrupt files, unknown names, mismatched checkpoints) prints one
+line `spatial-grounding: error: ...` and exits with status 2, without a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+DEFAULT_DATA = "../shared/data"
+
+
+def cmd_train(args) -> int:
+    from .training import TrainConfig, train_supervised
+
+    tc = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr, seed=args.seed,
+                     threads=args.threads)
+    path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
+    print(json.dumps({"checkpoint": str(path), **summary}, indent=2))
+    return 0
+
+
+def cmd_eval(args) -> int:
+    from .checkpoints import load_checkpoint
+    from .datasets import load_task
+    from .training import evaluate
+
+    loaded = load_checkpoint(args.checkpoint)
+    data = load_task(args.task, args.split, args.data)
+    if data.entities.names != loaded.entities.names:
+        raise ValueError(f"{args.checkpoint}: checkpoint was trained on the "
+                         f"{loaded.entities.domain} entity table, task {args.task} uses "
+                         f"{data.entities.domain}")
+    metrics = {"checkpoint": str(args.checkpoint), "model": loaded.name, "task": args.task,
+               "split": args.split, **evaluate(loaded.model, loaded.vocab, data)}
+    if args.json:
+        print(json.dumps(metrics))
+    else:
+        print(f"{loaded.name} on {args.task} {args.split} (n={metrics['n']}): "
+              f"MSE {metrics['mse']:.3f}  PQ {metrics['pq']:.3f}  MD {metrics['md']:.2f}")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from . import world
+    from .generator import generate
+    from .grounder import Grounder
+    from .plots import plot_grounding
+
+    grounder = Grounder.from_checkpoint(args.checkpoint)
+    data = generate(args.episodes, seed=args.seed, mode="mixed")
+    out = Path(args.out)
+    preds = []
+    for i in range(len(data)):
+        g = grounder.ground(data.grids[i], data.instructions[i])
+        preds.append(g.values)
+        true_goal = tuple(int(x) for x in data.goals[i])
+        err = abs(g.goal[0] - true_goal[0]) + abs(g.goal[1] - true_goal[1])
+        png = plot_grounding(out / f"episode_{i}.png", data.grids[i], grounder.entities, g.values,
+                             g.relation_map, data.instructions[i], g.goal, true_goal)
+        print(f"[{i}] {data.instructions[i]!r}: goal {g.goal}, true {true_goal}, "
+              f"Manhattan error {err} -> {png}")
+    m = world.evaluate_maps(preds, data.values, data.rewards, data.terminal)
+    print(f"summary over {m['n']} generated worlds: MSE {m['mse']:.3f}  PQ {m['pq']:.3f}  "
+          f"MD {m['md']:.2f}")
+    return 0
+
+
+def cmd_reproduce(args) -> int:
+    from .reproduce import reproduce_value_maps
+
+    reproduce_value_maps(args.data, args.out, args.epochs_scale, args.tasks, args.models)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .datasets import SPLITS, TASKS
+    from .models import MODELS
+
+    p = argparse.ArgumentParser(prog="spatial-grounding", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    t = sub.add_parser("train", help="supervised training on a task's train split")
+    t.add_argument("--task", required=True, choices=TASKS)
+    t.add_argument("--model", required=True, choices=list(MODELS))
+    t.add_argument("--data", default=DEFAULT_DATA)
+    t.add_argument("--out", default="out")
+    t.add_argument("--epochs", type=int, default=None)
+    t.add_argument("--batch-size", type=int, default=512)
+    t.add_argument("--lr", type=float, default=1e-3)
+    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--threads", type=int, default=2)
+    t.set_defaults(func=cmd_train)
+
+    e = sub.add_parser("eval", help="evaluate a checkpoint on a split")
+    e.add_argument("--checkpoint", required=True)
+    e.add_argument("--task", required=True, choices=TASKS)
+    e.add_argument("--split", default="test", choices=SPLITS)
+    e.add_argument("--data", default=DEFAULT_DATA)
+    e.add_argument("--json", action="store_true", help="print exactly one JSON object")
+    e.set_defaults(func=cmd_eval)
+
+    d = sub.add_parser("demo", help="ground generated worlds with a packaged checkpoint")
+    d.add_argument("--checkpoint", default="pw_t-rnet-attn")
+    d.add_argument("--episodes", type=int, default=5)
+    d.add_argument("--seed", type=int, default=7)
+    d.add_argument("--out", default="demo_out")
+    d.set_defaults(func=cmd_demo)
+
+    r = sub.add_parser("reproduce", help="train and evaluate the value-map table")
+    r.add_argument("--data", default=DEFAULT_DATA)
+    r.add_argument("--out", default="results")
+    r.add_argument("--tasks", nargs="+", default=["pw-local", "pw-global", "pw", "isi"])
+    r.add_argument("--models", nargs="+", default=list(MODELS))
+    r.add_argument("--epochs-scale", type=float, default=1.0,
+                   help="multiply every epoch budget (e.g. 0.1 for a quick check)")
+    r.set_defaults(func=cmd_reproduce)
+
+    for register in _extensions():
+        register(sub)
+    return p
+
+
+def _extensions():
+    """Subcommands defined next to the code they drive (bench, RL, bags)."""
+    found = []
+    for module in ("bench", "rl", "bags"):
+        try:
+            mod = __import__(f"{__package__}.{module}", fromlist=["register_cli"])
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__package__}.{module}":
+                raise
+            continue
+        found.append(mod.register_cli)
+    return found
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except (ValueError, FileNotFoundError) as exc:
+        print(f"spatial-grounding: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,95 @@
+"""`make reproduce`: train every model on every task, evaluate on the test splits, write
+`results/value_map.json` and `results/value_map.md` (the README table), and ship the
+t-RNetAttn and t-CNN checkpoints in the package."""
+from __future__ import annotations
+
+import json
+import platform
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .checkpoints import PACKAGED_DIR, load_checkpoint
+from .datasets import load_task
+from .training import EPOCHS, TrainConfig, evaluate, train_supervised
+
+# Table 1 of the paper (value maps, test split): (MSE, PQ, MD); ISI has no PQ there.
+PAPER = {
+    ("pw-local", "t-cnn"): (0.25, 0.94, 2.34), ("pw-local", "t-uvfa"): (3.23, 0.57, 4.97),
+    ("pw-local", "t-rnet-attn"): (0.22, 0.94, 1.95),
+    ("pw-global", "t-cnn"): (0.41, 0.89, 3.81), ("pw-global", "t-uvfa"): (1.90, 0.62, 5.31),
+    ("pw-global", "t-rnet-attn"): (0.40, 0.91, 3.82),
+    ("isi", "t-cnn"): (0.15, None, 3.14), ("isi", "t-uvfa"): (None, None, 4.61),
+    ("isi", "t-rnet-attn"): (0.15, None, 3.43),
+}
+SHIPPED = ("t-rnet-attn", "t-cnn")
+
+
+def forward_latency(model, grids, tokens, repeats: int = 50) -> float:
+    """Median seconds of one forward pass."""
+    with torch.no_grad():
+        model(grids, tokens)
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            model(grids, tokens)
+            times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def _fmt(x, digits=2):
+    return "-" if x is None else f"{x:.{digits}f}"
+
+
+def markdown_table(rows: list[dict]) -> str:
+    lines = ["| task | model | MSE | PQ | MD | paper MSE / PQ / MD | train min |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        paper = PAPER.get((r["task"], r["model"]))
+        paper_s = " / ".join(_fmt(x) for x in paper) if paper else "-"
+        lines.append(f"| {r['task']} | {r['model']} | {r['test']['mse']:.3f} | {r['test']['pq']:.3f} "
+                     f"| {r['test']['md']:.2f} | {paper_s} | {r['train_seconds'] / 60:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def reproduce_value_maps(data_dir: str, out: str, epochs_scale: float = 1.0,
+                         tasks=("pw-local", "pw-global", "pw", "isi"),
+                         models=("t-rnet-attn", "t-rnet", "t-cnn", "t-uvfa")) -> list[dict]:
+    out = Path(out)
+    ckpt_dir = out / "checkpoints"
+    results_path = out / "value_map.json"
+    previous = json.loads(results_path.read_text())["runs"] if results_path.is_file() else []
+    runs = {(r["task"], r["model"]): r for r in previous}
+    for task in tasks:
+        test = load_task(task, "test", data_dir)
+        for model_name in models:
+            tc = TrainConfig(epochs=max(1, int(EPOCHS[task] * epochs_scale)))
+            path, summary = train_supervised(task, model_name, data_dir, ckpt_dir, tc)
+            loaded = load_checkpoint(path)
+            row = {"task": task, "model": model_name, **summary,
+                   "test": evaluate(loaded.model, loaded.vocab, test), "checkpoint": path.name}
+            g1 = torch.from_numpy(test.grids[:1])
+            tokens = torch.from_numpy(loaded.vocab.encode_batch(test.instructions[:512]))
+            row["forward_seconds_one_map"] = forward_latency(loaded.model, g1, tokens[:1])
+            row["forward_seconds_batch_512"] = forward_latency(
+                loaded.model, torch.from_numpy(test.grids[:512]), tokens, repeats=5)
+            runs[(task, model_name)] = row
+            if model_name in SHIPPED:
+                PACKAGED_DIR.mkdir(exist_ok=True)
+                shutil.copy(path, PACKAGED_DIR / path.name)
+            print(f"{task} {model_name}: test {row['test']}", flush=True)
+            _write(results_path, runs)
+    return list(runs.values())
+
+
+def _write(results_path: Path, runs: dict) -> None:
+    order = {t: i for i, t in enumerate(("pw-local", "pw-global", "pw", "isi"))}
+    rows = sorted(runs.values(), key=lambda r: (order.get(r["task"], 9), r["model"]))
+    results_path.parent.mkdir(parents=True, exist_ok=True)
+    meta = {"command": "make reproduce", "machine": platform.processor() or platform.machine(),
+            "torch_threads": torch.get_num_threads(), "torch": torch.__version__}
+    results_path.write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
+    results_path.with_suffix(".md").write_text(markdown_table(rows))

@@ -1,0 +1,100 @@
+"""Data sets: the paper's split counts, ISI conversion, vocabulary, generator."""
+import gzip
+import json
+
+import numpy as np
+import pytest
+
+from spatial_grounding_ros import datasets, generator, world
+from spatial_grounding_ros.text import UNK, Vocabulary, tokenize
+
+
+@pytest.mark.parametrize("task,split,count", [("pw-local", "train", 1566), ("pw-local", "test", 399),
+                                              ("pw-global", "train", 1071), ("pw-global", "test", 272)])
+def test_puddleworld_split_counts(data_dir, task, split, count):
+    data = datasets.load_task(task, split, data_dir)
+    assert len(data) == count
+    assert data.grids.shape == (count, 10, 10)
+    # each value map is the true one of its goal
+    np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
+
+
+def test_train_and_test_worlds_are_disjoint(data_dir):
+    train = set(datasets.load_task("pw-local", "train", data_dir).worlds)
+    test = set(datasets.load_task("pw-local", "test", data_dir).worlds)
+    assert train and test and not train & test
+
+
+@pytest.mark.parametrize("split,count", [("train", 11871), ("test", 3177)])
+def test_isi_counts_and_grid(data_dir, split, count):
+    data = datasets.load_isi(data_dir, split)
+    assert len(data) == count
+    assert data.grids.shape[1:] == (13, 13)
+    assert data.grids.max() <= 40 and len(data.entities) == 41
+    # the goal is the true map's best cell, and value iteration made the maps
+    np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
+
+
+def test_isi_dev_split_loads_the_same_way(data_dir, tmp_path):
+    (tmp_path / "isi").mkdir()
+    with gzip.open(data_dir / "isi" / "testset.json.gz", "rt") as src:
+        first = src.readline()
+    with gzip.open(tmp_path / "isi" / "devset.json.gz", "wt") as dst:
+        dst.write(first)
+    dev = datasets.load_task("isi", "dev", tmp_path)
+    seq = json.loads(first)
+    assert len(dev) == sum(len(n["notes"]) for n in seq["notes"] if n["type"] == "A0")
+
+
+def test_isi_cell_conversion():
+    assert datasets.isi_cell(-1.0) == 0
+    assert datasets.isi_cell(1.0) == 12
+    assert datasets.isi_cell(0.0) == 6
+
+
+def test_missing_and_corrupt_files_name_the_file(tmp_path):
+    with pytest.raises(FileNotFoundError, match="local.p"):
+        datasets.load_task("pw-local", "train", tmp_path)
+    (tmp_path / "puddleworld").mkdir()
+    (tmp_path / "puddleworld" / "local.p").write_bytes(b"not a pickle")
+    with pytest.raises(ValueError, match="local.p: corrupt"):
+        datasets.load_task("pw-local", "train", tmp_path)
+    (tmp_path / "isi").mkdir()
+    (tmp_path / "isi" / "trainset.json.gz").write_bytes(b"\x1f\x8b broken")
+    with pytest.raises(ValueError, match="trainset.json.gz"):
+        datasets.load_task("isi", "train", tmp_path)
+    with pytest.raises(ValueError, match="unknown task"):
+        datasets.load_task("pw-nowhere", "train", tmp_path)
+
+
+def test_vocabulary_reserves_pad_and_unknown():
+    vocab = Vocabulary.build(["reach the rock", "go to the tree."])
+    assert vocab.words[:2] == ["<pad>", "<unk>"]
+    assert tokenize("Reach the ROCK.") == ["reach", "the", "rock"]
+    ids = vocab.encode_batch(["reach the zebra", "tree"])
+    assert ids.shape == (2, 3)
+    assert ids[0, 2] == UNK and ids[1, 1] == 0
+
+
+def test_generator_makes_consistent_examples():
+    data = generator.generate(60, seed=3, mode="mixed")
+    assert len(data) == 60
+    np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
+    for grid, text, goal in zip(data.grids, data.instructions, data.goals):
+        if text.startswith("reach cell with "):
+            assert generator.PUDDLEWORLD.names[grid[tuple(goal)]] == text.split()[-1]
+    again = generator.generate(60, seed=3, mode="mixed")
+    assert again.instructions == data.instructions
+
+
+def test_generator_directions_follow_row0_is_north():
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[5, 5] = generator.PUDDLEWORLD.index("star")
+    goals = dict(generator.local_goals(grid))
+    assert goals["reach cell on top of star"] == (4, 5)
+    assert goals["reach cell two to the right of star"] == (5, 7)
+    assert goals["reach cell one to the left and two below star"] == (7, 4)
+    grid[2, 1] = grid[8, 3] = generator.PUDDLEWORLD.index("rock")
+    goals = dict(generator.global_goals(grid))
+    assert goals["reach northernmost rock"] == (2, 1)
+    assert goals["reach easternmost rock"] == (8, 3)
