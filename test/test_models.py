@@ -1,0 +1,114 @@
+"""Models: the paper's sizes, gradient flow into every module, batching, any map size."""
+import numpy as np
+import pytest
+import torch
+
+from spatial_grounding_ros import generator
+from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
+from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
+from spatial_grounding_ros.models import MODELS, ModelConfig, TRNet, build_model, relation_param_count
+from spatial_grounding_ros.text import Vocabulary
+
+
+def test_parameter_vector_sizes_are_the_papers():
+    assert relation_param_count(ModelConfig(embed_dim=7)) == 263
+    assert relation_param_count(ModelConfig(embed_dim=13)) == 383
+    attn = TRNet(ModelConfig(embed_dim=7, vocab_size=10))
+    assert attn.decoder.out_features == 263
+    assert build_model("t-cnn", ModelConfig(embed_dim=7)).decoder.out_features == 66
+    assert build_model("t-cnn", ModelConfig(embed_dim=13)).decoder.out_features == 120
+
+
+def _batch(n=6, size=10, seed=0):
+    data = generator.generate(n, seed=seed, mode="mixed", size=size)
+    vocab = Vocabulary.build(data.instructions)
+    return data, vocab, torch.from_numpy(data.grids), torch.from_numpy(vocab.encode_batch(data.instructions))
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_gradient_reaches_every_module(name):
+    data, vocab, grids, tokens = _batch()
+    torch.manual_seed(0)
+    model = build_model(name, ModelConfig(vocab_size=len(vocab)))
+    loss = ((model(grids, tokens) - torch.from_numpy(data.values)) ** 2).mean()
+    loss.backward()
+    for pname, p in model.named_parameters():
+        assert p.grad is not None and p.grad.abs().sum() > 0, f"{name}: no gradient in {pname}"
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_batched_equals_one_by_one_and_padding_is_ignored(name):
+    data, vocab, grids, tokens = _batch(n=5)
+    torch.manual_seed(0)
+    model = build_model(name, ModelConfig(vocab_size=len(vocab))).eval()
+    with torch.no_grad():
+        batched = model(grids, tokens)
+        for i in range(len(grids)):
+            alone = torch.from_numpy(vocab.encode_batch([data.instructions[i]]))
+            torch.testing.assert_close(model(grids[i:i + 1], alone)[0], batched[i], atol=1e-5, rtol=1e-4)
+
+
+@pytest.mark.parametrize("shape", [(3, 4), (13, 13), (32, 20)])
+def test_any_map_size(shape):
+    model = build_model("t-rnet-attn", ModelConfig(vocab_size=5)).eval()
+    grids = torch.randint(0, 12, (2, *shape))
+    with torch.no_grad():
+        values, aux = model(grids, torch.tensor([[2, 3, 4], [2, 0, 0]]), return_aux=True)
+    assert values.shape == (2, *shape) and aux["relation_map"].shape == (2, *shape)
+    torch.testing.assert_close(aux["attention"].sum(-1), torch.ones(2))
+    assert aux["attention"][1, 1:].abs().max() == 0  # no attention on padding
+
+
+def test_isi_sizes():
+    model = build_model("t-rnet-attn", ModelConfig(n_entities=len(ISI), embed_dim=ISI.embed_dim, vocab_size=9))
+    values = model(torch.randint(0, len(ISI), (2, 13, 13)), torch.randint(1, 9, (2, 7)))
+    assert values.shape == (2, 13, 13)
+
+
+def test_checkpoint_round_trip_and_mismatch_errors(tmp_path):
+    data, vocab, grids, tokens = _batch()
+    cfg = ModelConfig(vocab_size=len(vocab))
+    model = build_model("t-rnet-attn", cfg).eval()
+    path = save_checkpoint(tmp_path / "m.pt", "t-rnet-attn", model, cfg, vocab, PUDDLEWORLD, task="test")
+    loaded = load_checkpoint(path)  # weights_only=True inside
+    assert loaded.header["task"] == "test" and loaded.vocab.words == vocab.words
+    with torch.no_grad():
+        torch.testing.assert_close(loaded.model(grids, tokens), model(grids, tokens))
+    with pytest.raises(ValueError, match="holds model 't-rnet-attn', not 't-cnn'"):
+        load_checkpoint(path, expect_model="t-cnn")
+    with pytest.raises(ValueError, match="entity table"):
+        load_checkpoint(path, expect_entities=ISI)
+    (tmp_path / "bad.pt").write_bytes(b"garbage")
+    with pytest.raises(ValueError, match="bad.pt: not a readable checkpoint"):
+        load_checkpoint(tmp_path / "bad.pt")
+    with pytest.raises(FileNotFoundError, match="nope.pt"):
+        load_checkpoint(tmp_path / "nope.pt")
+    # a vocabulary of another size than the weights: caught at load time
+    blob = torch.load(path, weights_only=True)
+    blob["header"]["vocabulary"] = blob["header"]["vocabulary"] + ["extra"]
+    torch.save(blob, tmp_path / "vocab.pt")
+    with pytest.raises(ValueError, match="vocab"):
+        load_checkpoint(tmp_path / "vocab.pt")
+
+
+def test_unknown_model_name():
+    with pytest.raises(ValueError, match="unknown model 'resnet'"):
+        build_model("resnet", ModelConfig())
+
+
+def test_no_python_loop_over_cells_cost_is_flat_in_batch():
+    """One batched call for 64 maps agrees with the same maps in one call of 1 each (above)
+    and its graph has a fixed number of nodes, whatever the map size."""
+    model = build_model("t-rnet-attn", ModelConfig(vocab_size=5))
+    counts = []
+    for size in (4, 16):
+        out = model(torch.randint(0, 12, (2, size, size)), torch.tensor([[2, 3], [3, 4]]))
+        seen, stack = set(), [out.grad_fn]
+        while stack:
+            fn = stack.pop()
+            if fn is None or fn in seen:
+                continue
+            seen.add(fn)
+            stack += [f for f, _ in fn.next_functions]
+        counts.append(len(seen))
+    assert counts[0] == counts[1]
