@@ -1,0 +1,288 @@
+"""Goal navigation with RL (paper section 3.3): explore with the predicted value map, then
+fitted value iteration against a periodically synced target network. Read top to bottom.
+
+The agent never sees a true value map. It sees what an environment shows (the map, the
+instruction, its cell) and the reward of each cell it enters. Value convention (world.py):
+the value of a cell includes that cell's own reward, V(s) = R(s) + gamma * max_a V(next(s, a)),
+and V(goal) = R(goal) at the terminal goal. A transition (s, a, r, s', done) therefore
+teaches the value of s', the cell entered, whose reward r = R(s') it just observed:
+
+    target(s') = r                                        if s' is terminal
+    target(s') = r + gamma * max_a V_target(next(s', a))  otherwise
+
+The "max over next cells" uses the known deterministic move model (world.next_cell_indices:
+4 moves, off the map stays put), as in the paper's loss. Only cells the agent entered are
+regressed. PQ and MD are then measured on the predicted maps of the test split
+(world.evaluate_maps), the true maps being used for that evaluation only.
+
+`--via-ros` runs the very same loop, but the episodes come from the gridworld node's topics
+(ros/gridworld_client.py) instead of an in-process GridWorldEnv.
+"""
+from __future__ import annotations
+
+import copy
+import functools
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from . import world
+from .checkpoints import save_checkpoint
+from .datasets import TASKS, GroundingSet
+from .env import GridWorldEnv, load_episodes
+from .models import MODELS, ModelConfig, build_model
+from .text import Vocabulary
+from .training import predict
+
+RL_TASKS = ("pw-local", "pw-global", "isi")
+
+
+@dataclass
+class RLConfig:
+    """All RL hyper-parameters in one place."""
+    episodes: int = 20_000          # episodes of experience in total
+    envs: int = 128                 # episodes run side by side per round (one forward pass)
+    step_limit: int | None = None   # None: 5 * the map's longer side
+    gamma: float = world.GAMMA
+    lr: float = 1e-3
+    batch_maps: int = 64            # maps per regression step (all their visited cells)
+    updates_per_round: int = 8      # regression steps after each round of episodes
+    target_sync: int = 40           # regression steps between target-network syncs
+    eps_start: float = 1.0          # epsilon-greedy exploration, decayed linearly ...
+    eps_end: float = 0.1
+    eps_fraction: float = 0.5       # ... over this fraction of the episodes
+    seed: int = 0
+    threads: int = 1
+
+
+class ReplayBuffer:
+    """Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
+    per distinct pair. Because moves are deterministic, the cells entered in a map, with
+    their observed reward and terminal flag, are all a regression step needs: `visited`,
+    `reward`, `terminal` (per map, (H, W)) are kept up to date from the transitions."""
+
+    def __init__(self, shape: tuple[int, int]):
+        self.shape = shape
+        self.key_to_id: dict[tuple[bytes, str], int] = {}
+        self.grids: list[np.ndarray] = []
+        self.instructions: list[str] = []
+        self.visited: list[np.ndarray] = []
+        self.reward: list[np.ndarray] = []
+        self.terminal: list[np.ndarray] = []
+        self.transitions: list[tuple[int, int, int, float, int, bool]] = []
+
+    def map_id(self, grid: np.ndarray, instruction: str) -> int:
+        key = (np.asarray(grid, np.int64).tobytes(), instruction)
+        if key not in self.key_to_id:
+            self.key_to_id[key] = len(self.grids)
+            self.grids.append(np.asarray(grid, np.int64))
+            self.instructions.append(instruction)
+            for table, dtype in ((self.visited, bool), (self.reward, np.float32),
+                                 (self.terminal, bool)):
+                table.append(np.zeros(self.shape, dtype))
+        return self.key_to_id[key]
+
+    def add(self, map_id: int, s: tuple, a: int, r: float, s2: tuple, done: bool) -> None:
+        w = self.shape[1]
+        self.transitions.append((map_id, s[0] * w + s[1], a, r, s2[0] * w + s2[1], done))
+        self.visited[map_id][s2] = True
+        self.reward[map_id][s2] = r
+        self.terminal[map_id][s2] = done
+
+    def sample_maps(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        return rng.choice(len(self.grids), size=min(n, len(self.grids)), replace=False)
+
+
+@functools.lru_cache(maxsize=8)
+def next_cells(height: int, width: int) -> np.ndarray:
+    """world.next_cell_indices, computed once per map size (it is read at every step)."""
+    return world.next_cell_indices(height, width)
+
+
+def act(values: np.ndarray, cell: tuple[int, int], epsilon: float, rng: np.random.Generator) -> int:
+    """Epsilon-greedy over the greedy policy of a predicted value map."""
+    if rng.random() < epsilon:
+        return int(rng.integers(len(world.ACTIONS)))
+    h, w = values.shape
+    return int(values.reshape(-1)[next_cells(h, w)[cell[0] * w + cell[1]]].argmax())
+
+
+@torch.no_grad()
+def predicted_maps(model, vocab: Vocabulary, grids: list[np.ndarray], instructions: list[str]) -> np.ndarray:
+    model.eval()
+    out = model(torch.as_tensor(np.stack(grids)), torch.as_tensor(vocab.encode_batch(instructions)))
+    model.train()
+    return out.numpy()
+
+
+def run_episodes(envs: list, model, vocab: Vocabulary, buffer: ReplayBuffer, epsilon: float,
+                 rng: np.random.Generator) -> list[float]:
+    """One episode per environment, side by side, acting on one predicted map per episode.
+    Returns each episode's total reward."""
+    obs = [env.reset()[0] for env in envs]
+    ids = [buffer.map_id(o["grid"], o["instruction"]) for o in obs]
+    maps = predicted_maps(model, vocab, [o["grid"] for o in obs], [o["instruction"] for o in obs])
+    returns = [0.0] * len(envs)
+    active = list(range(len(envs)))
+    while active:
+        still = []
+        for i in active:
+            s = obs[i]["agent"]
+            a = act(maps[i], s, epsilon, rng)
+            obs[i], r, terminated, truncated, _ = envs[i].step(a)
+            buffer.add(ids[i], s, a, r, obs[i]["agent"], terminated)
+            returns[i] += r
+            if not (terminated or truncated):
+                still.append(i)
+        active = still
+    return returns
+
+
+def fitted_value_step(model, target_maps: dict, target_model, vocab: Vocabulary,
+                      buffer: ReplayBuffer, opt, cfg: RLConfig, rng: np.random.Generator) -> float:
+    """One regression step on the visited cells of a batch of maps."""
+    ids = buffer.sample_maps(rng, cfg.batch_maps)
+    missing = [i for i in ids if i not in target_maps]
+    if missing:  # the target network is fixed between syncs: compute each map once
+        for i, v in zip(missing, predicted_maps(target_model, vocab, [buffer.grids[i] for i in missing],
+                                                [buffer.instructions[i] for i in missing])):
+            target_maps[i] = v
+    h, w = buffer.shape
+    nxt = next_cells(h, w)
+    v_next = np.stack([target_maps[i].reshape(-1)[nxt].max(axis=1) for i in ids])  # (B, H*W)
+    reward = np.stack([buffer.reward[i].reshape(-1) for i in ids])
+    terminal = np.stack([buffer.terminal[i].reshape(-1) for i in ids])
+    visited = torch.as_tensor(np.stack([buffer.visited[i].reshape(-1) for i in ids]))
+    target = torch.as_tensor(np.where(terminal, reward, reward + cfg.gamma * v_next), dtype=torch.float32)
+    grids = torch.as_tensor(np.stack([buffer.grids[i] for i in ids]))
+    tokens = torch.as_tensor(vocab.encode_batch([buffer.instructions[i] for i in ids]))
+    pred = model(grids, tokens).reshape(len(ids), -1)
+    loss = ((pred - target) ** 2)[visited].mean()
+    opt.zero_grad()
+    loss.backward()
+    opt.step()
+    return loss.item()
+
+
+def make_envs(data: GroundingSet, cfg: RLConfig) -> list[GridWorldEnv]:
+    envs = [GridWorldEnv(data, step_limit=cfg.step_limit) for _ in range(cfg.envs)]
+    for n, env in enumerate(envs):
+        env.rng = np.random.default_rng([cfg.seed, n])
+    return envs
+
+
+def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
+             cfg: RLConfig = RLConfig(), train_data: GroundingSet | None = None,
+             test_data: GroundingSet | None = None, envs: list | None = None,
+             progress: bool = True) -> tuple[Path, dict]:
+    """Train `model_name` by RL on `task`'s train split, evaluate on its test split, write
+    `out/rl_<task>_<model>.pt`. `envs` replaces the in-process environments (the ROS client)."""
+    torch.manual_seed(cfg.seed)
+    torch.set_num_threads(cfg.threads)
+    rng = np.random.default_rng(cfg.seed)
+    train = train_data if train_data is not None else load_episodes(task, "train", str(data_dir))
+    test = test_data if test_data is not None else load_episodes(task, "test", str(data_dir))
+    shape = tuple(train.grids.shape[1:])
+    cfg = RLConfig(**{**asdict(cfg), "step_limit": cfg.step_limit or 5 * max(shape)})
+    vocab = Vocabulary.build(train.instructions)
+    mcfg = ModelConfig(n_entities=len(train.entities), vocab_size=len(vocab),
+                       embed_dim=train.entities.embed_dim)
+    model = build_model(model_name, mcfg)
+    target_model = copy.deepcopy(model)
+    opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+    envs = envs if envs is not None else make_envs(train, cfg)
+    buffer = ReplayBuffer(shape)
+    target_maps: dict[int, np.ndarray] = {}
+    episodes, updates, log = 0, 0, []
+    start = time.perf_counter()
+    while episodes < cfg.episodes:
+        # 1. explore with the current predicted maps
+        progress_frac = episodes / max(1, cfg.eps_fraction * cfg.episodes)
+        epsilon = cfg.eps_start + min(1.0, progress_frac) * (cfg.eps_end - cfg.eps_start)
+        batch = envs[: max(1, min(len(envs), cfg.episodes - episodes))]
+        returns = run_episodes(batch, model, vocab, buffer, epsilon, rng)
+        episodes += len(batch)
+        # 2. fitted value iteration on the replay buffer
+        losses = []
+        for _ in range(cfg.updates_per_round):
+            losses.append(fitted_value_step(model, target_maps, target_model, vocab, buffer,
+                                            opt, cfg, rng))
+            updates += 1
+            if updates % cfg.target_sync == 0:
+                target_model.load_state_dict(model.state_dict())
+                target_maps.clear()
+        log.append((episodes, float(np.mean(returns)), float(np.mean(losses)), epsilon))
+        if progress and (len(log) % 20 == 0 or episodes >= cfg.episodes):
+            print(f"{task} {model_name}: {episodes} episodes, return {np.mean([l[1] for l in log[-20:]]):.2f}, "
+                  f"loss {np.mean([l[2] for l in log[-20:]]):.3f}, epsilon {epsilon:.2f}, "
+                  f"{time.perf_counter() - start:.0f} s", flush=True)
+    train_seconds = time.perf_counter() - start
+    # 3. evaluate the predicted maps of the test split (true maps used only here)
+    metrics = world.evaluate_maps(predict(model, vocab, test), test.values, test.rewards, test.terminal)
+    summary = {"task": task, "model": model_name, "test": metrics, "episodes": episodes,
+               "transitions": len(buffer.transitions), "maps_seen": len(buffer.grids),
+               "updates": updates, "train_seconds": round(train_seconds, 1),
+               "rl_config": asdict(cfg)}
+    path = save_checkpoint(Path(out) / f"rl_{task}_{model_name}.pt", model_name, model, mcfg,
+                           vocab, train.entities, task=task, training="rl (fitted value iteration)",
+                           training_data=f"{train.name} ({len(train)} examples, rewards only)",
+                           seed=cfg.seed, test_metrics=metrics, train_seconds=summary["train_seconds"],
+                           rl_config=asdict(cfg),
+                           return_history=[[e, round(r, 4), round(lo, 5)] for e, r, lo, _ in log])
+    return path, summary
+
+
+def cmd_rl_train(args) -> int:
+    cfg = RLConfig(seed=args.seed, threads=args.threads,
+                   **{k: v for k, v in (("episodes", args.episodes), ("envs", args.envs),
+                                        ("step_limit", args.step_limit),
+                                        ("updates_per_round", args.updates_per_round),
+                                        ("target_sync", args.target_sync),
+                                        ("batch_maps", args.batch_maps), ("lr", args.lr))
+                      if v is not None})
+    train = test = None
+    if args.task.startswith("generator"):
+        train = load_episodes(args.task, n=args.generated, seed=args.seed)
+        test = load_episodes(args.task, n=max(50, args.generated // 5), seed=args.seed + 1000)
+    if args.via_ros:
+        from .ros.gridworld_client import ros_envs
+
+        with ros_envs(args.task, args.data, train, cfg, args.seed) as envs:
+            path, summary = train_rl(args.task, args.model, args.data, args.out, cfg, train, test,
+                                     envs=envs, progress=not args.quiet)
+    else:
+        path, summary = train_rl(args.task, args.model, args.data, args.out, cfg, train, test,
+                                 progress=not args.quiet)
+    print(json.dumps({"checkpoint": str(path), **summary}))
+    return 0
+
+
+def register_cli(sub) -> None:
+    from .cli import DEFAULT_DATA
+
+    p = sub.add_parser("rl-train", help="train a model by RL (fitted value iteration)")
+    p.add_argument("--task", required=True,
+                   choices=[*RL_TASKS, *(t for t in TASKS if t not in RL_TASKS),
+                            "generator-local", "generator-global", "generator-mixed"])
+    p.add_argument("--model", required=True, choices=list(MODELS))
+    p.add_argument("--data", default=DEFAULT_DATA)
+    p.add_argument("--out", default="out")
+    p.add_argument("--episodes", type=int, default=None)
+    p.add_argument("--envs", type=int, default=None, help="episodes side by side per round")
+    p.add_argument("--step-limit", type=int, default=None)
+    p.add_argument("--updates-per-round", type=int, default=None)
+    p.add_argument("--target-sync", type=int, default=None)
+    p.add_argument("--batch-maps", type=int, default=None)
+    p.add_argument("--lr", type=float, default=None)
+    p.add_argument("--generated", type=int, default=500,
+                   help="number of generated training examples (generator-* tasks)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--via-ros", action="store_true",
+                   help="run episodes through the gridworld node's topics")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_rl_train)

@@ -1,0 +1,207 @@
+"""The gridworld node (`ros2 run spatial_grounding_ros gridworld`): a simulated
+PuddleWorld/ISI-style world over topics, a thin adapter over env.GridWorldEnv.
+
+Each episode publishes the entity map and the instruction (transient local, what the grounder
+node listens to), the agent's start pose, and, for evaluation only, the true goal, the true
+value map and the reward map. The agent moves on discrete `action`s, or walks toward a
+received `goal_pose` one cell per `step_period` (the greedy path of value iteration on the
+map's obstacles, i.e. the shortest way round puddles). After every move it publishes the
+agent pose, the reward of the cell entered and whether that ended the episode. Topics and
+parameters: config/gridworld.yaml. Bad input gets a warning and a diagnostic on
+/diagnostics, and the node keeps serving.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import rclpy
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import OccupancyGrid
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Bool, Float32, Float32MultiArray, Header, Int32, String
+from std_srvs.srv import Trigger
+
+from .. import world
+from ..env import GridWorldEnv, load_episodes
+from . import convert
+from .package_files import find_config
+
+NODE_NAME = "gridworld"
+PARAMS_FILE = "gridworld.yaml"
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# One message per move on agent_pose / reward / terminated: deep enough that a client
+# pairing them by count never loses one.
+STEPS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def default_parameters() -> dict:
+    """The node's parameters and defaults: config/gridworld.yaml is the single source."""
+    return yaml.safe_load(find_config(PARAMS_FILE).read_text())[NODE_NAME]["ros__parameters"]
+
+
+class GridWorldNode(Node):
+
+    def __init__(self, **node_options):
+        super().__init__(NODE_NAME, **node_options)
+        for name, value in default_parameters().items():
+            self.declare_parameter(name, value)
+        data = load_episodes(self.param("source"), self.param("split"), self.param("data_dir"),
+                             n=self.param("episodes"), seed=self.param("seed"))
+        self.env = GridWorldEnv(data, step_limit=self.param("step_limit"), order=self.param("order"))
+        self.env.rng = np.random.default_rng(self.param("seed"))
+        self.obstacles = np.isin(data.grids, data.entities.obstacles)
+        self.info = convert.map_info(self.env.shape, self.param("resolution"),
+                                     (self.param("origin_x"), self.param("origin_y")))
+        convert.check_map_info(self.info, max_cells=10 ** 7)
+        self.frame_id = self.param("frame_id")
+        self.get_logger().info(f"{len(data)} episodes from {data.name}, "
+                               f"{self.env.shape[0]}x{self.env.shape[1]} cells")
+
+        self.map_pub = self.create_publisher(OccupancyGrid, "entity_map", LATCHED)
+        self.instruction_pub = self.create_publisher(String, "instruction", LATCHED)
+        self.true_goal_pub = self.create_publisher(PoseStamped, "true_goal", LATCHED)
+        self.true_values_pub = self.create_publisher(Float32MultiArray, "true_value_map", LATCHED)
+        self.true_rewards_pub = self.create_publisher(Float32MultiArray, "true_reward_map", LATCHED)
+        self.pose_pub = self.create_publisher(PoseStamped, "agent_pose", STEPS)
+        self.reward_pub = self.create_publisher(Float32, "reward", STEPS)
+        self.terminated_pub = self.create_publisher(Bool, "terminated", STEPS)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray,
+                                                     self.param("diagnostics_topic"), 10)
+        self.create_subscription(Int32, "action", self.on_action, STEPS)
+        self.create_subscription(PoseStamped, "goal_pose", self.on_goal_pose, 10)
+        self.create_service(Trigger, "reset_episode", self.on_reset)
+        self.create_service(Trigger, "next_episode", self.on_next)
+        self.path_policy: np.ndarray | None = None  # greedy actions toward a goal_pose
+        self.path_goal: tuple[int, int] | None = None
+        self.walk_timer = self.create_timer(self.param("step_period"), self.walk_step)
+        self.start_episode(None)
+
+    def param(self, name: str):
+        return self.get_parameter(name).value
+
+    def header(self) -> Header:
+        return Header(stamp=self.get_clock().now().to_msg(), frame_id=self.frame_id)
+
+    def publish_pose(self) -> None:
+        self.pose_pub.publish(convert.cell_to_pose(self.env.agent, self.info, self.frame_id,
+                                                   self.get_clock().now().to_msg()))
+
+    def start_episode(self, example: int | None) -> None:
+        """Reset the environment (the next episode, or `example` again) and publish it."""
+        self.env.reset(example=example)
+        self.path_policy = self.path_goal = None
+        i, header = self.env.example, self.header()
+        self.map_pub.publish(convert.grid_to_occupancy_grid(self.env.grid, header, self.info))
+        self.true_goal_pub.publish(convert.cell_to_pose(self.env.goal, self.info, self.frame_id,
+                                                        header.stamp))
+        self.true_values_pub.publish(convert.value_map_to_float32_multiarray(
+            self.env.data.values[i]))
+        self.true_rewards_pub.publish(convert.value_map_to_float32_multiarray(
+            self.env.data.rewards[i]))
+        self.instruction_pub.publish(String(data=self.env.instruction))
+        self.publish_pose()
+        self.get_logger().info(f"episode {i}: {self.env.instruction!r}, agent at "
+                               f"{self.env.agent}")
+
+    def on_reset(self, request, response):
+        self.start_episode(self.env.example)
+        response.success, response.message = True, f"episode {self.env.example} restarted"
+        return response
+
+    def on_next(self, request, response):
+        self.start_episode(None)
+        response.success, response.message = True, f"episode {self.env.example} started"
+        return response
+
+    def move(self, action: int) -> None:
+        _, reward, terminated, truncated, _ = self.env.step(action)
+        self.publish_pose()
+        self.reward_pub.publish(Float32(data=reward))
+        self.terminated_pub.publish(Bool(data=terminated))
+        if terminated or truncated:
+            self.path_policy = None
+            self.get_logger().info(f"episode {self.env.example} "
+                                   f"{'reached the goal' if terminated else 'hit the step limit'}"
+                                   f" after {self.env.steps} moves, return "
+                                   f"{self.env.total_reward:g}")
+
+    def on_action(self, msg: Int32) -> None:
+        if not 0 <= msg.data < len(world.ACTIONS):
+            self.report("action", DiagnosticStatus.WARN,
+                        f"action {msg.data} ignored: use 0..{len(world.ACTIONS) - 1} "
+                        f"({', '.join(world.ACTION_NAMES)})")
+            return
+        if self.env.done:
+            self.report("action", DiagnosticStatus.WARN,
+                        f"action {msg.data} ignored: the episode is over (call next_episode "
+                        "or reset_episode)")
+            return
+        self.path_policy = None  # an explicit action cancels a goal walk
+        self.move(msg.data)
+
+    def on_goal_pose(self, msg: PoseStamped) -> None:
+        frame = msg.header.frame_id
+        if frame and frame != self.frame_id:
+            self.report("goal_pose", DiagnosticStatus.WARN,
+                        f"goal_pose ignored: frame {frame!r} is not the map frame "
+                        f"{self.frame_id!r}")
+            return
+        p = msg.pose.position
+        cell = convert.point_to_cell(p.x, p.y, self.info)
+        if cell is None:
+            self.report("goal_pose", DiagnosticStatus.WARN,
+                        f"goal_pose ignored: ({p.x:g}, {p.y:g}) is outside the "
+                        f"{self.info.width}x{self.info.height} map")
+            return
+        if self.env.done:
+            self.report("goal_pose", DiagnosticStatus.WARN,
+                        "goal_pose ignored: the episode is over (call next_episode)")
+            return
+        rewards, terminal = world.reward_map(self.obstacles[self.env.example], cell)
+        self.path_policy = world.greedy_policy(world.value_iteration(rewards, terminal))
+        self.path_goal = cell
+        self.report("goal_pose", DiagnosticStatus.OK, f"walking from {self.env.agent} to {cell}")
+
+    def walk_step(self) -> None:
+        if self.path_policy is None or self.env.done:
+            return
+        if self.env.agent == self.path_goal:
+            self.path_policy = None
+            return
+        self.move(int(self.path_policy[self.env.agent]))
+
+    def report(self, part: str, level: bytes, message: str) -> None:
+        log = self.get_logger()
+        {DiagnosticStatus.OK: log.info, DiagnosticStatus.WARN: log.warning}.get(
+            level, log.error)(message)
+        status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: {part}",
+                                  message=message, hardware_id="")
+        self.diagnostics_pub.publish(DiagnosticArray(header=self.header(), status=[status]))
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = GridWorldNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ValueError, FileNotFoundError) as exc:  # bad source, data dir or parameters
+        print(f"gridworld: error: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
