@@ -1,0 +1,312 @@
+"""rosbag2 (MCAP) bags without rclpy, with the `rosbags` library: a writer for the recorder,
+and `spatial-grounding eval-bag`, which scores the goals recorded in a bag.
+
+Bags are written in rosbag2 metadata version 9 with MCAP storage and the ROS 2 Jazzy type
+store, which is what `ros2 bag info/play` of Jazzy reads.
+
+Evaluation pairs every instruction with the goal_pose that answered it (the first goal after
+the instruction and before the next one) and with the truth recorded for it (the latest
+true_goal after the previous answer and up to this answer: the gridworld node publishes the
+truth just before the instruction, other tools may publish it after). Cells come from the
+entity_map's geometry (resolution, origin) as of the answer. MD is the mean Manhattan
+distance in cells; with value_map_raw, true_value_map and true_reward_map recorded too, PQ and
+MSE are computed as world.evaluate_maps does (the goal cell is the terminal one).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import world
+
+STORE = "ROS2_JAZZY"
+BAG_VERSION = 9
+TOPICS = {  # role -> default topic name (relative names match any namespace)
+    "instruction": "instruction", "goal": "goal_pose", "truth": "true_goal",
+    "map": "entity_map", "values": "value_map_raw", "true_values": "true_value_map",
+    "true_rewards": "true_reward_map",
+}
+MSGTYPES = {
+    "instruction": "std_msgs/msg/String", "goal": "geometry_msgs/msg/PoseStamped",
+    "truth": "geometry_msgs/msg/PoseStamped", "map": "nav_msgs/msg/OccupancyGrid",
+    "values": "std_msgs/msg/Float32MultiArray", "true_values": "std_msgs/msg/Float32MultiArray",
+    "true_rewards": "std_msgs/msg/Float32MultiArray",
+}
+REQUIRED = ("instruction", "goal", "truth", "map")
+
+
+def typestore():
+    from rosbags.typesys import Stores, get_typestore
+
+    return get_typestore(getattr(Stores, STORE))
+
+
+def qos(latched: bool, depth: int = 1000):
+    """A rosbags QoS profile for a topic's metadata: transient local for latched topics, so
+    `ros2 bag play` offers them latched again."""
+    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
+                                    QosReliability, QosTime)
+
+    infinite = QosTime(sec=2147483647, nsec=4294967295)
+    return Qos(history=QosHistory.KEEP_LAST, depth=1 if latched else depth,
+               reliability=QosReliability.RELIABLE,
+               durability=QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
+               deadline=infinite, lifespan=infinite, liveliness=QosLiveliness.AUTOMATIC,
+               liveliness_lease_duration=infinite, avoid_ros_namespace_conventions=False)
+
+
+class BagWriter:
+    """Serialized (CDR) messages into a new rosbag2 MCAP bag directory.
+
+        with BagWriter("run1") as bag:
+            bag.write("/gridworld/instruction", "std_msgs/msg/String", t_ns, cdr_bytes)
+    """
+
+    def __init__(self, path: str | Path, latched: set[str] = frozenset()):
+        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        self.path = Path(path)
+        if self.path.exists():
+            raise FileExistsError(f"{self.path}: already exists; a bag needs a new directory")
+        self.store, self.latched = typestore(), set(latched)
+        self.writer = Writer(self.path, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
+        self.connections = {}
+        self.counts: dict[str, int] = {}
+
+    def __enter__(self) -> "BagWriter":
+        self.writer.open()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+            self.writer = None
+
+    def write(self, topic: str, msgtype: str, timestamp_ns: int, data: bytes) -> None:
+        if topic not in self.connections:
+            self.connections[topic] = self.writer.add_connection(
+                topic, msgtype, typestore=self.store,
+                offered_qos_profiles=[qos(topic in self.latched)])
+            self.counts[topic] = 0
+        self.writer.write(self.connections[topic], int(timestamp_ns), bytes(data))
+        self.counts[topic] += 1
+
+    def write_message(self, topic: str, msgtype: str, timestamp_ns: int, msg) -> None:
+        """Serialize a rosbags message object (from `typestore().types[msgtype]`) and write it."""
+        self.write(topic, msgtype, timestamp_ns, self.store.serialize_cdr(msg, msgtype))
+
+
+def open_bag(path: str | Path):
+    """A rosbags Reader over a bag directory (or its .mcap/.db3 file), opened. Clear errors
+    for a missing path or something that is not a readable rosbag2 bag."""
+    from rosbags.rosbag2 import Reader
+
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: bag not found")
+    if path.is_file():
+        if not (path.parent / "metadata.yaml").is_file():
+            raise ValueError(f"{path}: not a rosbag2 bag (a bag is a directory with "
+                             "metadata.yaml and .mcap or .db3 files)")
+        path = path.parent
+    if not (path / "metadata.yaml").is_file():
+        raise ValueError(f"{path}: not a rosbag2 bag (no metadata.yaml)")
+    try:
+        reader = Reader(path)
+        reader.open()
+    except Exception as exc:  # rosbags raises its own error types and OSError/KeyError on junk
+        raise ValueError(f"{path}: not a readable rosbag2 bag ({type(exc).__name__}: {exc})") from exc
+    return reader
+
+
+def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[str, str]:
+    """role -> topic in the bag. An absolute name must match exactly; a relative one matches
+    a topic ending in /name (any namespace). Ambiguity is an error naming the candidates."""
+    found = {}
+    for role, name in wanted.items():
+        if name.startswith("/"):
+            matches = [t for t in available if t == name]
+        else:
+            matches = [t for t in available if t == "/" + name or t.endswith("/" + name)]
+        if len(matches) > 1:
+            raise ValueError(f"several topics match {name!r} ({', '.join(sorted(matches))}): "
+                             f"pass the full name with --{role.replace('_', '-')}-topic")
+        if matches:
+            topic = matches[0]
+            if available[topic] != MSGTYPES[role]:
+                raise ValueError(f"topic {topic} has type {available[topic]}, expected "
+                                 f"{MSGTYPES[role]} for the {role} topic")
+            found[role] = topic
+    return found
+
+
+def _cell(x: float, y: float, info) -> tuple[int, int] | None:
+    """Data-set (row, col) (row 0 = north) of map-frame point (x, y) for an OccupancyGrid's
+    info (ros/convert.point_to_cell's convention, for planar yaw-only origins, without rclpy)."""
+    o, p = info.origin.orientation, info.origin.position
+    yaw = math.atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z))
+    dx, dy = x - p.x, y - p.y
+    lx, ly = math.cos(yaw) * dx + math.sin(yaw) * dy, -math.sin(yaw) * dx + math.cos(yaw) * dy
+    col, grid_row = math.floor(lx / info.resolution), math.floor(ly / info.resolution)
+    if not (0 <= col < info.width and 0 <= grid_row < info.height):
+        return None
+    return info.height - 1 - grid_row, col
+
+
+def _array(msg) -> np.ndarray:
+    """A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W), row 0 = north."""
+    if len(msg.layout.dim) != 2:
+        raise ValueError(f"expected a 2-D Float32MultiArray layout, got {len(msg.layout.dim)} dims")
+    h, w = msg.layout.dim[0].size, msg.layout.dim[1].size
+    data = np.asarray(msg.data, dtype=np.float64)[msg.layout.data_offset:]
+    if data.size != h * w:
+        raise ValueError(f"{data.size} values for a {h}x{w} layout")
+    return data.reshape(h, w)[::-1]
+
+
+@dataclass
+class Episode:
+    instruction: str
+    goal: tuple[int, int]
+    truth: tuple[int, int]
+    values: np.ndarray | None = None
+    true_values: np.ndarray | None = None
+    true_rewards: np.ndarray | None = None
+
+
+@dataclass
+class BagEvaluation:
+    episodes: list[Episode] = field(default_factory=list)
+    unanswered: int = 0          # instructions without a goal_pose (or without a truth)
+    topics: dict = field(default_factory=dict)
+
+    def metrics(self) -> dict:
+        out = {"n": len(self.episodes), "unanswered": self.unanswered, "topics": self.topics}
+        if not self.episodes:
+            out["md"] = None
+            return out
+        md = [abs(e.goal[0] - e.truth[0]) + abs(e.goal[1] - e.truth[1]) for e in self.episodes]
+        out["md"] = float(np.mean(md))
+        out["reached"] = float(np.mean([d == 0 for d in md]))
+        full = [e for e in self.episodes if e.values is not None and e.true_values is not None
+                and e.true_rewards is not None and e.values.shape == e.true_values.shape]
+        if full and len({e.values.shape for e in full}) == 1:
+            pred = np.stack([e.values for e in full])
+            true = np.stack([e.true_values for e in full])
+            rewards = np.stack([e.true_rewards for e in full])
+            terminal = np.zeros(true.shape, bool)
+            for t, e in zip(terminal, full):
+                t[e.truth] = True
+            out["pq"] = float(np.mean(world.policy_quality(pred, true, rewards, terminal)))
+            out["mse"] = world.mse(pred, true)
+            out["n_value_maps"] = len(full)
+        return out
+
+
+def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagEvaluation:
+    """Pair instructions, answers and truths in a bag (see the module docstring)."""
+    wanted = {**TOPICS, **(topics or {})}
+    reader = open_bag(path)
+    try:
+        available = {c.topic: c.msgtype for c in reader.connections}
+        found = resolve_topics(available, wanted)
+        missing = [r for r in REQUIRED if r not in found]
+        if missing:
+            raise ValueError(
+                f"{path}: bag has no {', '.join(f'{r} topic ({wanted[r]!r}, {MSGTYPES[r]})' for r in missing)}; "
+                f"it has: {', '.join(sorted(available)) or 'no topics'}")
+        store = typestore()
+        role_of = {t: r for r, t in found.items()}
+        events = []  # (time, role, message)
+        try:
+            for conn, t, raw in reader.messages([c for c in reader.connections
+                                                 if c.topic in role_of]):
+                events.append((t, role_of[conn.topic], store.deserialize_cdr(raw, conn.msgtype)))
+        except Exception as exc:  # truncated or corrupt chunks
+            raise ValueError(f"{path}: bag is truncated or corrupt ({type(exc).__name__}: {exc})") from exc
+    finally:
+        reader.close()
+    events.sort(key=lambda e: e[0])
+    result = BagEvaluation(topics=found)
+    latest_map, latest_true, truths = None, {}, []
+    pending: dict | None = None  # the latest instruction and what answered it so far
+
+    def finish(p: dict | None) -> None:
+        if p is None:
+            return
+        cells = None
+        if p["goal"] is not None and p["truth"] is not None and p["map"] is not None:
+            info = p["map"].info
+            cells = (_cell(p["goal"].pose.position.x, p["goal"].pose.position.y, info),
+                     _cell(p["truth"].pose.position.x, p["truth"].pose.position.y, info))
+        if cells is None or None in cells:
+            result.unanswered += 1
+            return
+        ep = Episode(p["instruction"], *cells)
+        if p["values"] is not None:
+            ep.values = _array(p["values"])
+        if {"true_values", "true_rewards"} <= set(p["true"]):
+            ep.true_values = _array(p["true"]["true_values"])
+            ep.true_rewards = _array(p["true"]["true_rewards"])
+        result.episodes.append(ep)
+
+    for _, role, msg in events:
+        if role == "map":
+            latest_map = msg
+        elif role in ("true_values", "true_rewards"):
+            latest_true[role] = msg
+        elif role == "truth":
+            truths.append(msg)
+        elif role == "instruction":
+            finish(pending)
+            pending = {"instruction": msg.data, "goal": None, "truth": None, "map": None,
+                       "values": None, "true": {}}
+        elif pending is None:
+            continue
+        elif role == "values" and pending["values"] is None:
+            pending["values"] = msg
+        elif role == "goal" and pending["goal"] is None:
+            pending.update(goal=msg, truth=truths[-1] if truths else None, map=latest_map,
+                           true=dict(latest_true))
+            truths = []
+    finish(pending)
+    return result
+
+
+def cmd_eval_bag(args) -> int:
+    topics = {role: getattr(args, f"{role}_topic") for role in TOPICS
+              if getattr(args, f"{role}_topic") is not None}
+    metrics = evaluate_bag(args.bag, topics).metrics()
+    if args.json:
+        print(json.dumps({"bag": str(args.bag), **metrics}))
+    elif metrics["n"] == 0:
+        print(f"{args.bag}: no answered instruction with a recorded truth "
+              f"({metrics['unanswered']} unanswered)")
+    else:
+        line = f"{args.bag}: {metrics['n']} answered instructions, MD {metrics['md']:.2f}"
+        if "pq" in metrics:
+            line += f", PQ {metrics['pq']:.3f}, MSE {metrics['mse']:.3f}"
+        print(line + f" ({metrics['unanswered']} unanswered)")
+    return 0
+
+
+def register_cli(sub) -> None:
+    p = sub.add_parser("eval-bag", help="score the goals recorded in a rosbag2 bag (MD, PQ, MSE)")
+    p.add_argument("bag", help="bag directory (or its .mcap file)")
+    for role, name in TOPICS.items():
+        p.add_argument(f"--{role.replace('_', '-')}-topic", default=None,
+                       help=f"{MSGTYPES[role]} topic (default: {name!r} in any namespace)")
+    p.add_argument("--json", action="store_true", help="print exactly one JSON object")
+    p.set_defaults(func=cmd_eval_bag)
+    try:
+        from .ros.demo import register_cli as register_demo
+    except ImportError:  # rclpy absent: the closed-loop demo needs it
+        return
+    register_demo(sub)
