@@ -4,8 +4,8 @@ PuddleWorld/ISI-style world over topics, a thin adapter over env.GridWorldEnv.
 Each episode publishes the entity map and the instruction (transient local, what the grounder
 node listens to), the agent's start pose, and, for evaluation only, the true goal, the true
 value map and the reward map. The agent moves on discrete `action`s, or walks toward a
-received `goal_pose` one cell per `step_period` (the greedy path of value iteration on the
-map's obstacles, i.e. the shortest way round puddles). After every move it publishes the
+received `goal_pose` one cell per `step_period` (a shortest path, going round puddles when that is no
+longer). After every move it publishes the
 agent pose, the reward of the cell entered and whether that ended the episode. Topics and
 parameters: config/gridworld.yaml. Bad input gets a warning and a diagnostic on
 /diagnostics, and the node keeps serving.
@@ -163,10 +163,18 @@ class GridWorldNode(Node):
             self.report("goal_pose", DiagnosticStatus.WARN,
                         "goal_pose ignored: the episode is over (call next_episode)")
             return
-        rewards, terminal = world.reward_map(self.obstacles[self.env.example], cell)
-        self.path_policy = world.greedy_policy(world.value_iteration(rewards, terminal))
+        self.path_policy = world.greedy_policy(self.path_values(cell))
         self.path_goal = cell
         self.report("goal_pose", DiagnosticStatus.OK, f"walking from {self.env.agent} to {cell}")
+
+    def path_values(self, cell: tuple[int, int]) -> np.ndarray:
+        """Minus the cost to reach `cell`: 1 per move, 1.5 into an obstacle (puddle), so the
+        walk takes a shortest path and goes round puddles when that is no longer. (The task's
+        discounted values would rather stay out of a puddle forever than cross it.)"""
+        cost = np.where(self.obstacles[self.env.example], -1.5, -1.0)
+        terminal = np.zeros(cost.shape, bool)
+        cost[cell], terminal[cell] = 0.0, True
+        return world.value_iteration(cost, terminal, gamma=1.0)
 
     def walk_step(self) -> None:
         if self.path_policy is None or self.env.done:

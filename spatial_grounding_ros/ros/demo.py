@@ -1,0 +1,229 @@
+"""The closed-loop demo: the gridworld and grounder nodes run as real processes in a namespace
+of their own; the grounder answers each episode's instruction with a goal_pose, the gridworld
+walks its agent there cell by cell. This process watches the topics, records every one of them
+to an MCAP bag, prints one line per episode and a summary (also computed back from the bag
+with eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import OccupancyGrid
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_msgs.msg import Bool, Float32, Float32MultiArray, String
+from std_srvs.srv import Trigger
+
+from ..bags import evaluate_bag
+from ..entities import PUDDLEWORLD
+from ..plots import plot_grounding
+from . import convert
+from .bag_recorder import BagRecorder
+from .gridworld_node import LATCHED, STEPS
+
+RECORDED = {  # topic -> type; the first six are latched
+    "entity_map": "nav_msgs/msg/OccupancyGrid", "instruction": "std_msgs/msg/String",
+    "true_goal": "geometry_msgs/msg/PoseStamped",
+    "true_value_map": "std_msgs/msg/Float32MultiArray",
+    "true_reward_map": "std_msgs/msg/Float32MultiArray",
+    "value_map_raw": "std_msgs/msg/Float32MultiArray",
+    "value_map": "nav_msgs/msg/OccupancyGrid", "relation_map": "nav_msgs/msg/OccupancyGrid",
+    "goal_pose": "geometry_msgs/msg/PoseStamped", "agent_pose": "geometry_msgs/msg/PoseStamped",
+    "reward": "std_msgs/msg/Float32", "terminated": "std_msgs/msg/Bool",
+    "diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+}
+LATCHED_TOPICS = {"entity_map", "instruction", "true_goal", "true_value_map", "true_reward_map",
+                  "value_map_raw", "value_map", "relation_map"}
+
+
+def executable(name: str) -> list[str]:
+    """The console script next to this Python (a venv's bin), else `python -m`."""
+    script = Path(sys.executable).parent / name
+    if script.is_file():
+        return [str(script)]
+    module = {"gridworld": "gridworld_node", "grounder": "grounder_node"}[name]
+    return [sys.executable, "-m", f"spatial_grounding_ros.ros.{module}"]
+
+
+class DemoWatcher(Node):
+    """Follows one episode at a time: the goal the grounder sent, the agent's moves."""
+
+    def __init__(self, namespace: str):
+        super().__init__("demo_watcher", namespace=namespace)
+        self.goals: list[PoseStamped] = []
+        self.poses: list[PoseStamped] = []
+        self.rewards: list[float] = []
+        self.terminated = False
+        self.map_msg: OccupancyGrid | None = None
+        self.values: Float32MultiArray | None = None
+        self.relation: OccupancyGrid | None = None
+        self.true_goal: PoseStamped | None = None
+        self.instruction = ""
+        self.create_subscription(PoseStamped, "goal_pose", self.goals.append, 10)
+        self.create_subscription(PoseStamped, "agent_pose", self.poses.append, STEPS)
+        self.create_subscription(Float32, "reward", lambda m: self.rewards.append(m.data), STEPS)
+        self.create_subscription(Bool, "terminated", self.on_terminated, STEPS)
+        self.create_subscription(OccupancyGrid, "entity_map",
+                                 lambda m: setattr(self, "map_msg", m), LATCHED)
+        self.create_subscription(Float32MultiArray, "value_map_raw",
+                                 lambda m: setattr(self, "values", m), LATCHED)
+        self.create_subscription(OccupancyGrid, "relation_map",
+                                 lambda m: setattr(self, "relation", m), LATCHED)
+        self.create_subscription(String, "instruction",
+                                 lambda m: setattr(self, "instruction", m.data), LATCHED)
+        self.create_subscription(PoseStamped, "true_goal",
+                                 lambda m: setattr(self, "true_goal", m), LATCHED)
+        self.next_client = self.create_client(Trigger, "next_episode")
+        self.reset_client = self.create_client(Trigger, "reset_episode")
+
+    def on_terminated(self, msg: Bool) -> None:
+        self.terminated = self.terminated or msg.data
+
+    def clear(self) -> None:
+        self.goals.clear()
+        self.poses.clear()
+        self.rewards.clear()
+        self.terminated = False
+        self.values = self.relation = None
+
+    def cell(self, pose: PoseStamped) -> tuple[int, int]:
+        return convert.point_to_cell(pose.pose.position.x, pose.pose.position.y, self.map_msg.info)
+
+
+def spin_until(executor, condition, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"demo: no {what} within {timeout:g} s")
+        executor.spin_once(timeout_sec=0.02)
+
+
+def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = "../shared/data",
+             step_period: float = 0.05, step_limit: int = 40) -> dict:
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    bag_path = out / "demo_bag"
+    if bag_path.exists():
+        shutil.rmtree(bag_path)
+    use_data = (Path(data_dir) / "puddleworld" / "local.p").is_file()
+    source = ["-p", "source:=pw-local", "-p", "split:=test", "-p", f"data_dir:={data_dir}"] \
+        if use_data else ["-p", "source:=generator", "-p", f"episodes:={episodes}"]
+    namespace = f"/demo_{os.getpid()}"
+    common = ["--ros-args", "-r", f"__ns:={namespace}"]
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": os.environ.get(
+        "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
+    processes = [
+        subprocess.Popen(executable("gridworld") + common + source + [
+            "-p", f"seed:={seed}", "-p", "order:=sequential", "-p", f"step_limit:={step_limit}",
+            "-p", f"step_period:={step_period}", "-p", "diagnostics_topic:=diagnostics"],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+        subprocess.Popen(executable("grounder") + common + [
+            "-p", "diagnostics_topic:=diagnostics"],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+    ]
+    print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'}) and "
+          f"grounder running in namespace {namespace}; recording to {bag_path}", flush=True)
+    rclpy.init()
+    watcher = recorder = None
+    executor = SingleThreadedExecutor()
+    lines = []
+    try:
+        watcher = DemoWatcher(namespace)
+        recorder = BagRecorder(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
+        executor.add_node(watcher)
+        executor.add_node(recorder)
+        spin_until(executor, lambda: watcher.reset_client.service_is_ready(), 30, "gridworld node")
+        spin_until(executor, lambda: ("spatial_grounder", namespace) in
+                   watcher.get_node_names_and_namespaces(), 60, "grounder node")
+        for k in range(episodes):
+            # the grounder takes the instruction as it is published (not the latched copy),
+            # so the first episode is restarted until the grounder's subscription has matched
+            for attempt in range(10 if k == 0 else 1):
+                watcher.clear()
+                client = watcher.reset_client if k == 0 else watcher.next_client
+                future = client.call_async(Trigger.Request())
+                spin_until(executor, future.done, 10, "episode start")
+                try:
+                    spin_until(executor, lambda: watcher.goals and watcher.values is not None
+                               and watcher.relation is not None, 3 if k == 0 else 30, "grounding")
+                    break
+                except TimeoutError:
+                    if k > 0 or attempt == 9:
+                        raise
+            goal = watcher.cell(watcher.goals[0])
+
+            def settled() -> bool:
+                at = watcher.cell(watcher.poses[-1]) if watcher.poses else None
+                return watcher.terminated or at == goal or len(watcher.rewards) >= step_limit
+
+            spin_until(executor, settled, step_limit * step_period + 10, "agent arrival")
+            executor.spin_once(timeout_sec=0.05)
+            path = [watcher.cell(p) for p in watcher.poses]
+            truth = watcher.cell(watcher.true_goal)
+            error = abs(goal[0] - truth[0]) + abs(goal[1] - truth[1])
+            instruction = watcher.instruction
+            grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10 ** 6)
+            values = convert.float32_multiarray_to_value_map(watcher.values)
+            relation = convert.occupancy_grid_to_grid(watcher.relation, 10 ** 6).astype(float)
+            png = plot_grounding(out / f"episode_{k}.png", grid, PUDDLEWORLD, values, relation,
+                                 instruction, goal, truth, path_cells=path)
+            reward = float(sum(watcher.rewards))
+            outcome = ("reached the true goal" if watcher.terminated else
+                       "stopped at its goal_pose, not the true goal" if path[-1] == goal else
+                       "did not get to its goal_pose")
+            line = (f"[{k}] {instruction!r}: goal {goal}, true {truth}, "
+                    f"{outcome}, "
+                    f"Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}")
+            print(line, flush=True)
+            lines.append({"goal": goal, "truth": truth, "reached": watcher.terminated,
+                          "md": error, "reward": reward})
+    finally:
+        for node in (watcher, recorder):
+            if node is not None:
+                executor.remove_node(node)
+                node.destroy_node()
+        rclpy.try_shutdown()
+        for p in processes:
+            p.terminate()
+        for p in processes:
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+    summary = {"episodes": len(lines), "reached": sum(l["reached"] for l in lines),
+               "md": float(np.mean([l["md"] for l in lines])) if lines else None,
+               "reward": float(np.mean([l["reward"] for l in lines])) if lines else None,
+               "bag": str(bag_path), "from_bag": evaluate_bag(bag_path).metrics()}
+    bag = summary["from_bag"]
+    print(f"summary: {summary['reached']}/{summary['episodes']} episodes reached the goal, "
+          f"mean Manhattan error {summary['md']:.2f}, mean reward {summary['reward']:.2f}; "
+          f"eval-bag on {bag_path}: n {bag['n']}, MD {bag['md']:.2f}"
+          + (f", PQ {bag['pq']:.3f}, MSE {bag['mse']:.3f}" if "pq" in bag else ""))
+    return summary
+
+
+def cmd_closed_loop_demo(args) -> int:
+    run_demo(args.out, args.episodes, args.seed, args.data)
+    return 0
+
+
+def register_cli(sub) -> None:
+    from ..cli import DEFAULT_DATA
+
+    d = sub.add_parser("closed-loop-demo",
+                       help="gridworld + grounder nodes in a closed loop, recorded to a bag")
+    d.add_argument("--episodes", type=int, default=5)
+    d.add_argument("--seed", type=int, default=7)
+    d.add_argument("--data", default=DEFAULT_DATA,
+                   help="PuddleWorld local test maps are used when this folder holds them")
+    d.add_argument("--out", default="demo_out")
+    d.set_defaults(func=cmd_closed_loop_demo)
