@@ -185,9 +185,13 @@ class GridWorldNode(Node):
         self.move(int(self.path_policy[self.env.agent]))
 
     def report(self, part: str, level: bytes, message: str) -> None:
-        log = self.get_logger()
-        {DiagnosticStatus.OK: log.info, DiagnosticStatus.WARN: log.warning}.get(
-            level, log.error)(message)
+        # one call site per severity: rclpy refuses to change a call site's severity
+        if level == DiagnosticStatus.OK:
+            self.get_logger().info(message)
+        elif level == DiagnosticStatus.WARN:
+            self.get_logger().warning(message)
+        else:
+            self.get_logger().error(message)
         status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: {part}",
                                   message=message, hardware_id="")
         self.diagnostics_pub.publish(DiagnosticArray(header=self.header(), status=[status]))
