@@ -19,3 +19,71 @@ def data_dir() -> Path:
     if not (DATA / "puddleworld" / "local.p").is_file():
         pytest.skip(f"real data sets not found at {DATA} (set SPATIAL_GROUNDING_DATA)")
     return DATA
+
+
+class RosGraph:
+    """A fresh rclpy Context whose nodes spin in a background executor thread. Tests wait
+    on what the nodes received with wait_for(); close() destroys every node added."""
+
+    def __init__(self):
+        import threading
+
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.nodes = []
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        from rclpy.executors import ExternalShutdownException
+
+        try:
+            self.executor.spin()
+        except ExternalShutdownException:
+            pass
+
+    def add(self, node):
+        """Spin `node` (made with context=graph.context) and destroy it at the end."""
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    @staticmethod
+    def wait_for(predicate, timeout: float = 10.0, interval: float = 0.01) -> bool:
+        import time
+
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            time.sleep(interval)
+        return bool(predicate())
+
+    def close(self):
+        self.executor.shutdown()
+        self.thread.join(timeout=5)
+        for node in self.nodes:
+            node.destroy_node()
+        self.context.try_shutdown()
+
+
+@pytest.fixture
+def ros_context():
+    """A RosGraph for one test (see RosGraph)."""
+    pytest.importorskip("rclpy", reason="rclpy is not installed")
+    graph = RosGraph()
+    yield graph
+    graph.close()
+
+
+@pytest.fixture(scope="module")
+def ros_module_context():
+    """A RosGraph shared by a test module, so its nodes start once."""
+    pytest.importorskip("rclpy", reason="rclpy is not installed")
+    graph = RosGraph()
+    yield graph
+    graph.close()

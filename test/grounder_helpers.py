@@ -1,0 +1,114 @@
+"""Shared by the grounder node tests: small checkpoints that need no training, and a probe
+node that talks to the grounder over DDS and keeps everything it hears."""
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from spatial_grounding_ros.checkpoints import save_checkpoint
+from spatial_grounding_ros.entities import PUDDLEWORLD
+from spatial_grounding_ros.generator import generate
+from spatial_grounding_ros.models import ModelConfig, build_model
+from spatial_grounding_ros.text import Vocabulary
+
+MODEL = "t-rnet-attn"
+
+
+def generator_vocabulary() -> Vocabulary:
+    return Vocabulary.build(generate(300, seed=1, mode="mixed").instructions)
+
+
+def random_checkpoint(path: Path) -> Path:
+    """Seeded, untrained t-RNetAttn: its answer depends on the whole grid and text, so a
+    node that flipped or mangled its input would disagree with the Python API."""
+    vocab = generator_vocabulary()
+    cfg = ModelConfig(n_entities=len(PUDDLEWORLD), vocab_size=len(vocab))
+    torch.manual_seed(0)
+    return save_checkpoint(path, MODEL, build_model(MODEL, cfg), cfg, vocab, PUDDLEWORLD,
+                           task="test: random weights")
+
+
+def north_east_checkpoint(path: Path) -> Path:
+    """t-RNetAttn with hand-set weights whose value map is 0.1*G1 - G2: largest in data-set
+    row 0 (north, G2 = -1) and then in the last column (east, G1 = +1), whatever the map or
+    instruction. The model's own notion of north, with no training involved."""
+    vocab = generator_vocabulary()
+    cfg = ModelConfig(n_entities=len(PUDDLEWORLD), vocab_size=len(vocab), head=())
+    model = build_model(MODEL, cfg)
+    with torch.no_grad():
+        for p in model.parameters():
+            p.zero_()
+        model.decoder.bias[-3:] = torch.tensor([0.1, -1.0, 0.0])  # Z2 = b1*G1 + b2*G2 + b3*J
+        model.head.convs[0].weight[0, 1, 1, 1] = 1.0              # value = Z2 (centre tap)
+    return save_checkpoint(path, MODEL, model, cfg, vocab, PUDDLEWORLD,
+                           task="test: hand-set north-east model")
+
+
+def make_probe(context, namespace: str, grounder_name: str):
+    """A node that publishes entity maps and instructions into `namespace` and records the
+    grounder's outputs, its diagnostics and its /rosout lines."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import OccupancyGrid
+    from rcl_interfaces.msg import Log
+    from rclpy.node import Node
+    from std_msgs.msg import Float32MultiArray, Header, String
+
+    from spatial_grounding_ros.ros import convert
+    from spatial_grounding_ros.ros.grounder_node import LATCHED
+
+    class GrounderProbe(Node):
+        RECORDS = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics",
+                   "warnings")
+
+        def __init__(self):
+            super().__init__("grounder_probe", namespace=namespace, context=context)
+            self.goals, self.value_maps, self.raw_maps, self.relation_maps = [], [], [], []
+            self.diagnostics, self.warnings = [], []
+            self.stamps = itertools.count(1)
+            sub = self.create_subscription
+            sub(PoseStamped, "goal_pose", self.goals.append, 10)
+            sub(OccupancyGrid, "value_map", self.value_maps.append, LATCHED)
+            sub(Float32MultiArray, "value_map_raw", self.raw_maps.append, LATCHED)
+            sub(OccupancyGrid, "relation_map", self.relation_maps.append, LATCHED)
+            sub(DiagnosticArray, "/diagnostics", self.on_diagnostics, 100)
+            sub(Log, "/rosout", self.on_log, 100)
+            self.map_pub = self.create_publisher(OccupancyGrid, "entity_map", LATCHED)
+            self.instruction_pub = self.create_publisher(String, "instruction", 10)
+
+        def counts(self) -> dict:
+            """How many of each output so far; pass to new() to get what came after."""
+            return {k: len(v) for k, v in self.__dict__.items() if k in self.RECORDS}
+
+        def new(self, record: str, counts: dict) -> list:
+            return getattr(self, record)[counts[record]:]
+
+        def on_diagnostics(self, msg):
+            self.diagnostics += [s for s in msg.status if s.name.startswith(grounder_name)]
+
+        def on_log(self, msg):
+            if msg.name.endswith("spatial_grounder") and msg.level >= Log.WARN:
+                self.warnings.append(msg.msg)
+
+        def connected(self) -> bool:
+            return (self.instruction_pub.get_subscription_count() > 0
+                    and self.map_pub.get_subscription_count() > 0
+                    and self.count_publishers(f"{namespace}/goal_pose") > 0)
+
+        def publish_map(self, grid=None, info=None, frame_id="map", message=None):
+            """Publish an entity map (a data-set grid, or a ready message); returns it. Each
+            map gets a distinct stamp so a test can tell which one the grounder holds."""
+            if message is None:
+                header = Header(frame_id=frame_id)
+                message = convert.grid_to_occupancy_grid(np.asarray(grid), header, info)
+            message.header.stamp.sec = next(self.stamps)
+            self.map_pub.publish(message)
+            return message
+
+        def publish_instruction(self, text: str) -> None:
+            self.instruction_pub.publish(String(data=text))
+
+    return GrounderProbe()
