@@ -1,0 +1,207 @@
+"""The grounder node over real DDS, against the Python API it adapts: every output of a good
+request matches Grounder.ground on the same grid; every kind of bad input gets a warning, a
+WARN diagnostic naming the problem and no goal, and the node answers the next good request.
+One node (a seeded untrained model, so no trained checkpoint is needed) for the module."""
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy is not installed")
+
+from grounder_helpers import make_probe, random_checkpoint  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
+
+from spatial_grounding_ros.generator import generate  # noqa: E402
+from spatial_grounding_ros.grounder import Grounder  # noqa: E402
+from spatial_grounding_ros.ros import convert  # noqa: E402
+from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
+
+NAMESPACE = "/grounder_node_test"
+MAX_CELLS = 400
+MAX_CHARS = 80
+NO_GOAL_WAIT = 0.3  # after the diagnostic, how long a stray goal would have had to arrive
+WORLDS = generate(4, seed=3, mode="mixed")
+
+
+@pytest.fixture(scope="module")
+def checkpoint(tmp_path_factory):
+    return random_checkpoint(tmp_path_factory.mktemp("ckpt") / "random.pt")
+
+
+@pytest.fixture(scope="module")
+def reference(checkpoint):
+    return Grounder.from_checkpoint(str(checkpoint))
+
+
+@pytest.fixture(scope="module")
+def nodes(ros_module_context, checkpoint):
+    graph = ros_module_context
+    grounder = graph.add(GrounderNode(
+        context=graph.context, namespace=NAMESPACE,
+        parameter_overrides=[Parameter("checkpoint", value=str(checkpoint)),
+                             Parameter("max_cells", value=MAX_CELLS),
+                             Parameter("max_instruction_chars", value=MAX_CHARS)]))
+    probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
+    assert graph.wait_for(probe.connected, timeout=15), "probe and grounder never matched"
+    return graph, grounder, probe
+
+
+def wait_held(graph, grounder, message) -> None:
+    """Until the grounder holds `message` as its map (topics are not ordered among each
+    other, so an instruction sent right after a map could otherwise overtake it)."""
+    assert graph.wait_for(lambda: grounder.map_msg is not None
+                          and grounder.map_msg.header.stamp.sec == message.header.stamp.sec)
+
+
+def raw_values(msg) -> np.ndarray:
+    return convert.float32_multiarray_to_value_map(msg)
+
+
+def good_request(nodes, reference, world: int = 0, info=None, frame_id="map", grid=None):
+    """Publish a world's map and its instruction; check every output against the API."""
+    graph, grounder, probe = nodes
+    grid = WORLDS.grids[world] if grid is None else grid
+    text = WORLDS.instructions[world]
+    wait_held(graph, grounder, probe.publish_map(grid, info, frame_id))
+    before = probe.counts()
+    probe.publish_instruction(text)
+    outputs = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics")
+    assert graph.wait_for(lambda: all(probe.new(k, before) for k in outputs)), \
+        f"missing outputs for a good request: {probe.counts()} after {before}"
+    expected = reference.ground(grid, text)
+    info = info or convert.map_info(grid.shape)
+    [goal] = probe.new("goals", before)
+    assert goal.header.frame_id == frame_id
+    assert (goal.pose.position.x, goal.pose.position.y, goal.pose.position.z) == pytest.approx(
+        convert.cell_centre(expected.goal, info))
+    np.testing.assert_allclose(raw_values(probe.new("raw_maps", before)[-1]), expected.values,
+                               rtol=1e-6, atol=1e-6)
+    [value_map] = probe.new("value_maps", before)
+    assert (value_map.info.width, value_map.info.height) == (grid.shape[1], grid.shape[0])
+    assert value_map.info.resolution == info.resolution
+    assert value_map.header.frame_id == frame_id
+    assert min(value_map.data) == 0 and max(value_map.data) == 100
+    # the best cell is 100 in the scaled map, at the OccupancyGrid index of the goal
+    row, col = expected.goal
+    assert value_map.data[(grid.shape[0] - 1 - row) * grid.shape[1] + col] == 100
+    relation = probe.new("relation_maps", before)[-1].data
+    assert 0 <= min(relation) and max(relation) == 100
+    [status] = probe.new("diagnostics", before)
+    assert status.level == DiagnosticStatus.OK and f"{expected.goal}" in status.message
+    return goal
+
+
+def expect_rejected(nodes, before: dict, problem: str):
+    """Since `before`: one WARN diagnostic naming `problem`, a warning saying it, no goal."""
+    graph, grounder, probe = nodes
+    assert graph.wait_for(lambda: probe.new("diagnostics", before)), \
+        f"no diagnostic for bad input ({problem!r})"
+    [status] = probe.new("diagnostics", before)
+    assert status.level == DiagnosticStatus.WARN and problem in status.message, status
+    assert graph.wait_for(lambda: any(problem in w for w in probe.new("warnings", before)))
+    time.sleep(NO_GOAL_WAIT)
+    assert not probe.new("goals", before), "a goal was published for bad input"
+
+
+def test_good_request_matches_the_python_api(nodes, reference):
+    good_request(nodes, reference, world=0)
+    good_request(nodes, reference, world=1, frame_id="odom",
+                 info=convert.map_info((10, 10), resolution=0.25, origin=(-3.0, 4.0), yaw=0.4))
+
+
+def bad_map(grid=None, **change):
+    msg = convert.grid_to_occupancy_grid(WORLDS.grids[0] if grid is None else grid,
+                                         Header(frame_id="map"))
+    for key, value in change.items():
+        setattr(msg.info, key, value)
+    return msg
+
+
+def short_data():
+    msg = bad_map()
+    msg.data = msg.data[:-1]
+    return msg
+
+
+@pytest.mark.parametrize("make, problem", [
+    (short_data, "map data has 99 values, but width x height = 10x10 = 100"),
+    (lambda: bad_map(width=0), "width and height must be positive"),
+    (lambda: bad_map(height=0), "width and height must be positive"),
+    (lambda: bad_map(np.zeros((20, 21), int)), f"more than max_cells={MAX_CELLS}"),
+    (lambda: bad_map(np.full((3, 3), 12)), "entity values [12] outside the puddleworld table"),
+    (lambda: bad_map(np.full((3, 3), -1)), "entity values [-1] outside the puddleworld table"),
+    (lambda: bad_map(resolution=float("nan")), "resolution nan must be a positive"),
+    (lambda: bad_map(resolution=0.0), "resolution 0.0 must be a positive"),
+    (lambda: bad_map(resolution=-0.5), "resolution -0.5 must be a positive"),
+], ids=["data-length", "width-0", "height-0", "too-many-cells", "entity-12", "entity-minus-1",
+        "resolution-nan", "resolution-0", "resolution-negative"])
+def test_bad_map_is_rejected_and_the_node_recovers(nodes, reference, make, problem):
+    graph, grounder, probe = nodes
+    before = probe.counts()
+    probe.publish_map(message=make())
+    expect_rejected(nodes, before, problem)
+    assert grounder.grid is None  # the last map was bad: no stale map to ground on
+    good_request(nodes, reference, world=2)
+
+
+@pytest.mark.parametrize("text, problem", [
+    ("", "instruction is empty"),
+    (" \t\n ", "instruction is empty"),
+    ("reach cell " * 10, f"more than max_instruction_chars={MAX_CHARS}"),
+    ("xyzzy plugh frobozz", "no word of the instruction 'xyzzy plugh frobozz' is in the vocab"),
+    ("?!...", "instruction has no words"),
+], ids=["empty", "whitespace", "too-long", "unknown-words", "no-words"])
+def test_bad_instruction_is_rejected_and_the_node_recovers(nodes, reference, text, problem):
+    graph, grounder, probe = nodes
+    good_request(nodes, reference, world=0)  # a map is held: the rejection is the text's
+    before = probe.counts()
+    probe.publish_instruction(text)
+    expect_rejected(nodes, before, problem)
+    good_request(nodes, reference, world=3)
+
+
+def test_instruction_without_a_map_is_held_until_one_arrives(nodes, reference):
+    graph, grounder, probe = nodes
+    before = probe.counts()
+    probe.publish_map(message=bad_map(resolution=0.0))  # whatever came before: no map now
+    expect_rejected(nodes, before, "resolution 0.0")
+    text = WORLDS.instructions[1]
+    before = probe.counts()
+    probe.publish_instruction(text)
+    expect_rejected(nodes, before, "no valid entity_map held yet: holding instruction")
+    before = probe.counts()
+    probe.publish_map(WORLDS.grids[1])
+    assert graph.wait_for(lambda: probe.new("goals", before)), "held instruction never grounded"
+    expected = reference.ground(WORLDS.grids[1], text)
+    position = probe.goals[-1].pose.position
+    assert (position.x, position.y) == pytest.approx(
+        convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2])
+
+
+def test_map_of_another_size_is_a_new_map(nodes, reference):
+    good_request(nodes, reference, world=0)
+    good_request(nodes, reference, world=2, grid=WORLDS.grids[2][:7, :9].copy())
+    good_request(nodes, reference, world=3)
+
+
+def test_reground_on_map_change(nodes, reference):
+    graph, grounder, probe = nodes
+    good_request(nodes, reference, world=0)
+    before = probe.counts()
+    # off (the default): a new map waits for the next instruction
+    wait_held(graph, grounder, probe.publish_map(WORLDS.grids[3]))
+    time.sleep(NO_GOAL_WAIT)
+    assert not probe.new("goals", before)
+    grounder.set_parameters([Parameter("reground_on_map_change", value=True)])
+    try:
+        probe.publish_map(WORLDS.grids[1])
+        assert graph.wait_for(lambda: probe.new("goals", before)), "no goal for the new map"
+        expected = reference.ground(WORLDS.grids[1], WORLDS.instructions[0])
+        position = probe.goals[-1].pose.position
+        assert (position.x, position.y) == pytest.approx(
+            convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2])
+    finally:
+        grounder.set_parameters([Parameter("reground_on_map_change", value=False)])
