@@ -17,10 +17,18 @@ from torch import nn
 
 from .text import PAD
 
-# The 8 neighbours j of a cell i (the paper's 1-square neighbourhood), as (d_row, d_col),
-# and l_ij, a scalar code of j's position relative to i: evenly spaced in [-1, 1].
-NEIGHBOURS = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)]
-RELATIVE_POSITION = torch.linspace(-1.0, 1.0, len(NEIGHBOURS))
+
+
+def neighbour_offsets(radius: int) -> list[tuple[int, int]]:
+    """The cells j around i, as (d_row, d_col): radius 1 is the paper's 8 neighbours; the
+    paper's footnote extends relations to cells further away (radius 2: 24 neighbours)."""
+    return [(dr, dc) for dr in range(-radius, radius + 1) for dc in range(-radius, radius + 1)
+            if (dr, dc) != (0, 0)]
+
+
+def relative_positions(radius: int) -> torch.Tensor:
+    """l_ij: a scalar code of j's position relative to i, evenly spaced in [-1, 1]."""
+    return torch.linspace(-1.0, 1.0, len(neighbour_offsets(radius)))
 
 
 @dataclass
@@ -35,6 +43,8 @@ class ModelConfig:
     uvfa_text: int = 7            # t-UVFA text vector
     uvfa_channels: int = 16       # t-UVFA state encoder channels
     head: tuple = (3, 6, 12, 6, 3)  # output network: 3x3 conv channels before the last conv
+    radius: int = 1               # relation neighbourhood (1: the paper's 8 neighbours)
+    planner: bool = False         # value-iteration output layer (ours; False: the paper's)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -75,24 +85,28 @@ class TextEncoder(nn.Module):
 
 class EntityEncoder(nn.Module):
     """phi: an embedding per entity index, plus one learned 'off the map' entity that pads
-    the border so edge cells have 8 neighbours too."""
+    the border so edge cells have a full neighbourhood too."""
 
-    def __init__(self, cfg: ModelConfig):
+    def __init__(self, cfg: ModelConfig, pad: int = 1):
         super().__init__()
-        self.off_map = cfg.n_entities
+        self.off_map, self.pad = cfg.n_entities, pad
         self.embed = nn.Embedding(cfg.n_entities + 1, cfg.embed_dim)
 
     def forward(self, grids: torch.Tensor) -> torch.Tensor:
-        """(B,H,W) -> (B,H+2,W+2,k) embeddings of the border-padded grid."""
-        return self.embed(F.pad(grids, (1, 1, 1, 1), value=self.off_map))
+        """(B,H,W) -> (B,H+2p,W+2p,k) embeddings of the border-padded grid."""
+        p = self.pad
+        return self.embed(F.pad(grids, (p, p, p, p), value=self.off_map))
 
 
-def neighbour_index(height: int, width: int, device=None) -> tuple[torch.Tensor, torch.Tensor]:
-    """Flat indices into the padded (H+2)*(W+2) grid: each cell (H*W,) and its 8 neighbours (H*W, 8)."""
-    rows, cols = torch.meshgrid(torch.arange(1, height + 1, device=device),
-                                torch.arange(1, width + 1, device=device), indexing="ij")
-    centre = (rows * (width + 2) + cols).reshape(-1)
-    offsets = torch.tensor([dr * (width + 2) + dc for dr, dc in NEIGHBOURS], device=device)
+def neighbour_index(height: int, width: int, radius: int = 1,
+                    device=None) -> tuple[torch.Tensor, torch.Tensor]:
+    """Flat indices into the grid padded by `radius`: each cell (H*W,) and its neighbours (H*W, n)."""
+    padded_w = width + 2 * radius
+    rows, cols = torch.meshgrid(torch.arange(radius, height + radius, device=device),
+                                torch.arange(radius, width + radius, device=device), indexing="ij")
+    centre = (rows * padded_w + cols).reshape(-1)
+    offsets = torch.tensor([dr * padded_w + dc for dr, dc in neighbour_offsets(radius)],
+                           device=device)
     return centre, centre[:, None] + offsets[None, :]
 
 
@@ -112,11 +126,12 @@ class OutputHead(nn.Module):
     goal's value spread over a 10x10 map. No final ReLU: true values go negative (puddles,
     down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes."""
 
-    def __init__(self, channels: tuple = ()):
+    def __init__(self, channels: tuple = (), planner: bool = False):
         super().__init__()
         sizes = [2, *channels, 1]
         self.convs = nn.ModuleList(nn.Conv2d(a, b, kernel_size=3, padding=1)
                                    for a, b in zip(sizes[:-1], sizes[1:]))
+        self.planner = planner
 
     def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
         b, h, w = z1.shape
@@ -126,7 +141,21 @@ class OutputHead(nn.Module):
             x = conv(x)
             if n < len(self.convs) - 1:
                 x = torch.relu(x)
-        return x.squeeze(1)
+        x = x.squeeze(1)
+        return bellman_backups(x, steps=h + w) if self.planner else x
+
+
+def bellman_backups(rewards: torch.Tensor, steps: int, gamma: float = 0.9) -> torch.Tensor:
+    """V <- R + gamma * max over the 4 moves of V(next), `steps` times, from V = R: the grid
+    MDP's own value iteration (off-map moves stay put: edge-replicated padding), applied
+    to a predicted reward map R (B, H, W). H + W steps reach every cell from any goal."""
+    v = rewards
+    for _ in range(steps):
+        p = F.pad(v.unsqueeze(1), (1, 1, 1, 1), mode="replicate").squeeze(1)
+        best = torch.maximum(torch.maximum(p[:, :-2, 1:-1], p[:, 2:, 1:-1]),
+                             torch.maximum(p[:, 1:-1, :-2], p[:, 1:-1, 2:]))
+        v = rewards + gamma * best
+    return v
 
 
 class TRNet(nn.Module):
@@ -137,13 +166,13 @@ class TRNet(nn.Module):
     def __init__(self, cfg: ModelConfig, attention: bool = True):
         super().__init__()
         self.cfg, self.attention = cfg, attention
-        self.phi = EntityEncoder(cfg)
+        self.phi = EntityEncoder(cfg, pad=cfg.radius)
         self.text = TextEncoder(cfg)
         self.decoder = nn.Linear(cfg.hidden, relation_param_count(cfg))  # h -> 263
         if attention:
             # project h(k) to 2k dims to score it against [phi(s_i); phi(s_j)]
             self.attn = nn.Linear(cfg.hidden, 2 * cfg.embed_dim, bias=False)
-        self.head = OutputHead(cfg.head)
+        self.head = OutputHead(cfg.head, cfg.planner)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
 
@@ -171,7 +200,8 @@ class TRNet(nn.Module):
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b, h, w = grids.shape
         k = self.cfg.embed_dim
-        centre, nbrs = neighbour_index(h, w, grids.device)
+        centre, nbrs = neighbour_index(h, w, self.cfg.radius, grids.device)
+        n_nbrs = nbrs.shape[1]                                   # 8 at radius 1
         phi = self.phi(grids).flatten(1, 2)                      # (B, (H+2)(W+2), k)
         phi_i = phi[:, centre]                                   # (B, N, k)
         phi_j = phi[:, nbrs]                                     # (B, N, 8, k)
@@ -192,8 +222,8 @@ class TRNet(nn.Module):
                        for w in self.split_params(word_params)]
         else:
             weights = self.split_params(self.decoder(mean))     # (B, out, in) per layer
-        rel = RELATIVE_POSITION.to(grids.device).expand(b, h * w, -1).unsqueeze(-1)
-        x = torch.cat([phi_i.unsqueeze(2).expand(-1, -1, len(NEIGHBOURS), -1), phi_j, rel], -1)
+        rel = relative_positions(self.cfg.radius).to(grids.device).expand(b, h * w, -1).unsqueeze(-1)
+        x = torch.cat([phi_i.unsqueeze(2).expand(-1, -1, n_nbrs, -1), phi_j, rel], -1)
         r = self.relation_mlp(weights, x, per_pair=self.attention)  # (B, N, 8)
         z1 = r.max(dim=-1).values.view(b, h, w)
         beta = self.decoder(mean)[:, -3:]                        # the last 3 entries of h
@@ -216,7 +246,7 @@ class TCNN(nn.Module):
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)
         self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + 3)  # 66 for k = 7
-        self.head = OutputHead(cfg.head)
+        self.head = OutputHead(cfg.head, cfg.planner)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b, h, w = grids.shape

@@ -76,7 +76,7 @@ def evaluate(model, vocab: Vocabulary, data: GroundingSet) -> dict:
 
 def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str | Path,
                      tc: TrainConfig = TrainConfig(), train_data: GroundingSet | None = None,
-                     progress: bool = True) -> tuple[Path, dict]:
+                     progress: bool = True, **model_options) -> tuple[Path, dict]:
     """Train `model_name` on `task`, keep the epoch with the lowest validation MSE, write
     `out/<task>_<model>.pt`; returns its path and a summary."""
     tc = TrainConfig(**{**vars(tc), "epochs": tc.epochs or EPOCHS[task]})
@@ -86,7 +86,7 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
     train, val = split_by_world(data, tc.val_fraction, tc.seed)
     vocab = Vocabulary.build(data.instructions)
     cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab),
-                      embed_dim=data.entities.embed_dim)
+                      embed_dim=data.entities.embed_dim, **model_options)
     model = build_model(model_name, cfg)
     opt = torch.optim.Adam(model.parameters(), lr=tc.lr)
     steps = tc.epochs * int(np.ceil(len(train) / tc.batch_size))
