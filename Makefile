@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 DATA ?= ../shared/data
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test reproduce bench clean
+.PHONY: setup demo test reproduce reproduce-rl bench clean
 
 setup: $(STAMP)
 
@@ -24,6 +24,10 @@ test: $(STAMP)
 
 reproduce: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce --data $(DATA) --out results
+
+# RL rows of the paper's table (about an hour on 2 cores): results/rl.json, results/rl.md
+reproduce-rl: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce-rl --data $(DATA) --out results
 
 bench: $(STAMP)
 	$(VENV)/bin/spatial-grounding bench --out results/bench.json

@@ -286,3 +286,83 @@ def register_cli(sub) -> None:
                    help="run episodes through the gridworld node's topics")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_rl_train)
+
+    r = sub.add_parser("reproduce-rl", help="RL rows of the paper's table: train, evaluate, "
+                                            "write rl.json and rl.md")
+    r.add_argument("--data", default=DEFAULT_DATA)
+    r.add_argument("--out", default="results")
+    r.add_argument("--checkpoints", default="out", help="where the RL checkpoints go")
+    r.add_argument("--tasks", nargs="+", default=list(RL_TASKS), choices=RL_TASKS)
+    r.add_argument("--models", nargs="+", default=["t-rnet-attn", "t-cnn"], choices=list(MODELS))
+    r.add_argument("--episodes-scale", type=float, default=1.0,
+                   help="multiply every episode budget (e.g. 0.05 for a quick check)")
+    r.add_argument("--jobs", type=int, default=2, help="runs in parallel, one thread each")
+    r.set_defaults(func=cmd_reproduce_rl)
+
+
+# --- reproduction of the paper's RL rows -------------------------------------------------
+
+# The paper's Table (RL, test split): (PQ, MD) per model and task.
+PAPER_RL = {
+    "t-cnn": {"pw-local": (0.89, 2.03), "pw-global": (0.91, 3.80), "isi": (0.74, 3.94)},
+    "t-uvfa": {"pw-local": (0.56, 4.71), "pw-global": (0.62, 6.28), "isi": (0.15, 4.61)},
+    "t-rnet-attn": {"pw-local": (0.91, 2.10), "pw-global": (0.93, 4.23), "isi": (0.84, 3.79)},
+}
+# Episode budgets per model and task for `reproduce-rl` (about an hour on 2 cores in total:
+# t-RNetAttn costs ten times more per map than t-CNN).
+RL_EPISODES = {
+    "t-rnet-attn": {"pw-local": 30_000, "pw-global": 30_000, "isi": 30_000},
+    "t-cnn": {"pw-local": 60_000, "pw-global": 60_000, "isi": 60_000},
+    "t-uvfa": {"pw-local": 60_000, "pw-global": 60_000, "isi": 60_000},
+}
+RL_EPISODES["t-rnet"] = RL_EPISODES["t-rnet-attn"]
+
+
+def rl_table(results: list[dict]) -> str:
+    """Markdown: ours beside the paper's PQ / MD."""
+    lines = ["| task | model | PQ ours | PQ paper | MD ours | MD paper | episodes | minutes |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in results:
+        pq, md = PAPER_RL.get(r["model"], {}).get(r["task"], (None, None))
+        lines.append(f"| {r['task']} | {r['model']} | {r['test']['pq']:.2f} | "
+                     f"{'-' if pq is None else f'{pq:.2f}'} | {r['test']['md']:.2f} | "
+                     f"{'-' if md is None else f'{md:.2f}'} | {r['episodes']} | "
+                     f"{r['train_seconds'] / 60:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def reproduce_rl(data_dir: str, out: str, tasks=RL_TASKS, models=("t-rnet-attn", "t-cnn"),
+                 scale: float = 1.0, jobs: int = 2, checkpoints: str = "out") -> list[dict]:
+    """Train every (model, task) by RL in `jobs` parallel processes (one thread each), write
+    out/rl.json and out/rl.md."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    runs = sorted(((m, t) for m in models for t in tasks),
+                  key=lambda mt: -RL_EPISODES[mt[0]][mt[1]] * (10 if mt[0] == "t-rnet-attn" else 1))
+    cfgs = [RLConfig(episodes=max(1, int(RL_EPISODES[m][t] * scale))) for m, t in runs]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(train_rl, t, m, data_dir, checkpoints, cfg, progress=False)
+                   for (m, t), cfg in zip(runs, cfgs)]
+        results = []
+        for (m, t), f in zip(runs, futures):
+            path, summary = f.result()
+            print(f"{t} {m}: PQ {summary['test']['pq']:.3f}  MD {summary['test']['md']:.2f}  "
+                  f"({summary['train_seconds'] / 60:.1f} min) -> {path}", flush=True)
+            results.append({**summary, "checkpoint": str(path)})
+    order = {t: i for i, t in enumerate(RL_TASKS)}
+    results.sort(key=lambda r: (order.get(r["task"], 9), r["model"]))
+    Path(out).mkdir(parents=True, exist_ok=True)
+    (Path(out) / "rl.json").write_text(json.dumps(
+        {"command": f"spatial-grounding reproduce-rl --data {data_dir} --out {out}",
+         "paper": PAPER_RL, "results": results}, indent=2) + "\n")
+    (Path(out) / "rl.md").write_text(
+        "RL goal navigation (fitted value iteration, rewards only), test split; paper = "
+        "Yang et al. 2020 Table 1.\n\n" + rl_table(results))
+    print(rl_table(results))
+    return results
+
+
+def cmd_reproduce_rl(args) -> int:
+    reproduce_rl(args.data, args.out, args.tasks, args.models, args.episodes_scale, args.jobs,
+                 args.checkpoints)
+    return 0
