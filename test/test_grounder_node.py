@@ -43,7 +43,9 @@ def nodes(ros_module_context, checkpoint):
         context=graph.context, namespace=NAMESPACE,
         parameter_overrides=[Parameter("checkpoint", value=str(checkpoint)),
                              Parameter("max_cells", value=MAX_CELLS),
-                             Parameter("max_instruction_chars", value=MAX_CHARS)]))
+                             Parameter("max_instruction_chars", value=MAX_CHARS),
+                             # leave torch's thread count to the rest of the test session
+                             Parameter("torch_threads", value=0)]))
     probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
     assert graph.wait_for(probe.connected, timeout=15), "probe and grounder never matched"
     return graph, grounder, probe

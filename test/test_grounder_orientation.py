@@ -23,8 +23,10 @@ TRAINED_MD = 3.0
 
 
 def start(graph, namespace, overrides=()):
-    grounder = graph.add(GrounderNode(context=graph.context, namespace=namespace,
-                                      parameter_overrides=list(overrides)))
+    # torch_threads 0: leave torch's thread count to the rest of the test session
+    grounder = graph.add(GrounderNode(
+        context=graph.context, namespace=namespace,
+        parameter_overrides=[Parameter("torch_threads", value=0), *overrides]))
     probe = graph.add(make_probe(graph.context, namespace, grounder.get_fully_qualified_name()))
     assert graph.wait_for(probe.connected, timeout=15)
     return grounder, probe

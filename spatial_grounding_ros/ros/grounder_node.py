@@ -12,6 +12,7 @@ import sys
 
 import numpy as np
 import rclpy
+import torch
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
@@ -46,6 +47,8 @@ class GrounderNode(Node):
         for name, value in default_parameters().items():
             self.declare_parameter(name, value)
 
+        if self.param("torch_threads") > 0:
+            torch.set_num_threads(self.param("torch_threads"))
         self.grounder = Grounder.from_checkpoint(self.param("checkpoint"))
         table_path = find_config(self.param("entity_table"))
         table = EntityTable.from_yaml(table_path)
