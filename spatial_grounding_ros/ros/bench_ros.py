@@ -1,0 +1,115 @@
+"""End-to-end ROS latency for `spatial-grounding bench`: the grounder node runs as its own
+process (as deployed); a client node in this process holds one entity map on the topic and
+times each instruction from publish() to the goal_pose callback."""
+from __future__ import annotations
+
+import os
+import random
+import subprocess
+import threading
+import time
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import OccupancyGrid
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_msgs.msg import Header, String
+
+from . import convert
+from .demo import executable
+from .grounder_node import LATCHED
+
+NAMESPACE = "/bench"
+
+
+def process_rss_mb(pid: int | str = "self") -> float:
+    """Resident set size of a process now (Linux /proc), in MB."""
+    with open(f"/proc/{pid}/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    raise RuntimeError(f"no VmRSS for process {pid}")
+
+
+class LatencyClient(Node):
+    def __init__(self, context):
+        super().__init__("bench_client", namespace=NAMESPACE, context=context)
+        self.map_pub = self.create_publisher(OccupancyGrid, "entity_map", LATCHED)
+        self.instruction_pub = self.create_publisher(String, "instruction", 10)
+        self.goal_received = threading.Event()
+        self.received_at = 0.0
+        self.create_subscription(PoseStamped, "goal_pose", self.on_goal, 10)
+
+    def on_goal(self, msg: PoseStamped) -> None:
+        self.received_at = time.perf_counter()
+        self.goal_received.set()
+
+    def connected(self) -> bool:
+        return (self.instruction_pub.get_subscription_count() > 0
+                and self.count_publishers(f"{NAMESPACE}/goal_pose") > 0)
+
+    def request(self, text: str, timeout: float) -> float:
+        """Seconds from publishing `text` to its goal_pose."""
+        self.goal_received.clear()
+        sent = time.perf_counter()
+        self.instruction_pub.publish(String(data=text))
+        if not self.goal_received.wait(timeout):
+            raise RuntimeError(f"no goal_pose within {timeout} s for {text!r}")
+        return self.received_at - sent
+
+
+def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str],
+                       requests: int, warmup: int = 20, progress=None) -> dict:
+    """p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
+    grounder process's RSS after the warm-up and at the end."""
+    # loopback only, and a domain of its own unless the caller chose one (both processes)
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 100)))
+    node_process = subprocess.Popen(
+        [*executable("grounder"), "--ros-args", "-r", f"__ns:={NAMESPACE}",
+         "-p", f"checkpoint:={checkpoint}"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    executor = SingleThreadedExecutor(context=context)
+    client = LatencyClient(context)
+    executor.add_node(client)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    try:
+        deadline = time.monotonic() + 60
+        while not client.connected():
+            if node_process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError("the grounder node did not come up")
+            time.sleep(0.05)
+        client.map_pub.publish(convert.grid_to_occupancy_grid(grid, Header(frame_id="map")))
+        client.request(instructions[0], timeout=30)  # the first one also waits for the map
+        for i in range(warmup):
+            client.request(instructions[i % len(instructions)], timeout=10)
+        rss_after_warmup = process_rss_mb(node_process.pid)
+        latencies = []
+        for i in range(requests):
+            latencies.append(client.request(instructions[i % len(instructions)], timeout=10))
+            if progress is not None:
+                progress.update(1)
+        rss_end = process_rss_mb(node_process.pid)
+    finally:
+        executor.shutdown()
+        spinner.join(timeout=5)
+        client.destroy_node()
+        context.try_shutdown()
+        node_process.terminate()
+        try:
+            node_process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            node_process.kill()
+    ms = np.array(latencies) * 1e3
+    return {"requests": requests, "map": f"{grid.shape[0]}x{grid.shape[1]}",
+            "p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99)),
+            "max_ms": float(ms.max()), "mean_ms": float(ms.mean()),
+            "node_rss_mb_after_warmup": rss_after_warmup, "node_rss_mb_end": rss_end,
+            "measured": "instruction published by a client node in the bench process -> "
+                        "goal_pose received by it; the grounder node in its own process "
+                        f"(console script), one held map, {warmup} warm-up requests first"}
