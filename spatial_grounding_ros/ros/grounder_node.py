@@ -22,6 +22,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float32MultiArray, Header, String
 
+from ..checkpoints import resolve_checkpoint
 from ..entities import EntityTable
 from ..grounder import Grounder
 from . import convert
@@ -58,7 +59,8 @@ class GrounderNode(Node):
                              f"({self.grounder.entities.domain}, "
                              f"{len(self.grounder.entities)} kinds)")
         self.get_logger().info(f"model {self.grounder.loaded.name} from "
-                               f"{self.param('checkpoint')}, entity table {table_path}")
+                               f"{resolve_checkpoint(self.param('checkpoint'))}, "
+                               f"entity table {table_path}")
 
         self.grid: np.ndarray | None = None     # latest valid map, row 0 = north
         self.map_msg: OccupancyGrid | None = None
