@@ -46,7 +46,7 @@ def test_fitted_value_target_uses_own_reward_and_target_max():
     target = ConstantMap(target_values)
     vocab = Vocabulary.build([text])
     opt = torch.optim.SGD(online.parameters(), lr=0.5)
-    cfg = RLConfig(batch_maps=1, gamma=0.9)
+    cfg = RLConfig(batch_maps=1, gamma=0.9, priority=0.0)
     fitted_value_step(online, {}, target, vocab, buffer, opt, cfg, np.random.default_rng(0))
     # loss = mean over the 2 visited cells of (pred - target)^2; SGD step lr 0.5 moves each
     # visited cell by 0.5 * 2 * (target - pred) / 2 = 0.5 * target, the rest not at all
