@@ -322,12 +322,13 @@ PAPER_RL = {
     "t-uvfa": {"pw-local": (0.56, 4.71), "pw-global": (0.62, 6.28), "isi": (0.15, 4.61)},
     "t-rnet-attn": {"pw-local": (0.91, 2.10), "pw-global": (0.93, 4.23), "isi": (0.84, 3.79)},
 }
-# Episode budgets per model and task for `reproduce-rl` (about an hour on 2 cores in total:
-# t-RNetAttn costs ten times more per map than t-CNN).
+# Episode budgets per model and task for `reproduce-rl`, sized for about 45 minutes on 2
+# cores (t-RNetAttn costs about ten times more per map than t-CNN, ISI maps 1.7 times more
+# than PuddleWorld's).
 RL_EPISODES = {
-    "t-rnet-attn": {"pw-local": 30_000, "pw-global": 30_000, "isi": 30_000},
-    "t-cnn": {"pw-local": 60_000, "pw-global": 60_000, "isi": 60_000},
-    "t-uvfa": {"pw-local": 60_000, "pw-global": 60_000, "isi": 60_000},
+    "t-rnet-attn": {"pw-local": 8_000, "pw-global": 8_000, "isi": 5_000},
+    "t-cnn": {"pw-local": 15_000, "pw-global": 15_000, "isi": 20_000},
+    "t-uvfa": {"pw-local": 15_000, "pw-global": 15_000, "isi": 20_000},
 }
 RL_EPISODES["t-rnet"] = RL_EPISODES["t-rnet-attn"]
 
