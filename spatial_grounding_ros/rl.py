@@ -54,7 +54,7 @@ class RLConfig:
     batch_maps: int = 64            # maps per regression step (all their visited cells)
     updates_per_round: int = 48     # regression steps after each round of episodes
     target_sync: int = 100          # regression steps between target-network syncs
-    priority: float = 2.0           # weight cells by (|error| + 0.1)^priority (0: plain mean)
+    priority: float = 1.0           # weight cells by (|error| + 0.1)^priority (0: plain mean)
     double: bool = False            # double FVI: online map picks the next cell, target values it
     eps_start: float = 1.0          # epsilon-greedy exploration, decayed linearly ...
     eps_end: float = 0.1
