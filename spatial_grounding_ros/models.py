@@ -44,7 +44,6 @@ class ModelConfig:
     uvfa_channels: int = 16       # t-UVFA state encoder channels
     head: tuple = (3, 6, 12, 6, 3)  # output network: 3x3 conv channels before the last conv
     radius: int = 1               # relation neighbourhood (1: the paper's 8 neighbours)
-    planner: bool = False         # value-iteration output layer (ours; False: the paper's)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -126,12 +125,11 @@ class OutputHead(nn.Module):
     goal's value spread over a 10x10 map. No final ReLU: true values go negative (puddles,
     down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes."""
 
-    def __init__(self, channels: tuple = (), planner: bool = False):
+    def __init__(self, channels: tuple = ()):
         super().__init__()
         sizes = [2, *channels, 1]
         self.convs = nn.ModuleList(nn.Conv2d(a, b, kernel_size=3, padding=1)
                                    for a, b in zip(sizes[:-1], sizes[1:]))
-        self.planner = planner
 
     def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
         b, h, w = z1.shape
@@ -141,21 +139,7 @@ class OutputHead(nn.Module):
             x = conv(x)
             if n < len(self.convs) - 1:
                 x = torch.relu(x)
-        x = x.squeeze(1)
-        return bellman_backups(x, steps=h + w) if self.planner else x
-
-
-def bellman_backups(rewards: torch.Tensor, steps: int, gamma: float = 0.9) -> torch.Tensor:
-    """V <- R + gamma * max over the 4 moves of V(next), `steps` times, from V = R: the grid
-    MDP's own value iteration (off-map moves stay put: edge-replicated padding), applied
-    to a predicted reward map R (B, H, W). H + W steps reach every cell from any goal."""
-    v = rewards
-    for _ in range(steps):
-        p = F.pad(v.unsqueeze(1), (1, 1, 1, 1), mode="replicate").squeeze(1)
-        best = torch.maximum(torch.maximum(p[:, :-2, 1:-1], p[:, 2:, 1:-1]),
-                             torch.maximum(p[:, 1:-1, :-2], p[:, 1:-1, 2:]))
-        v = rewards + gamma * best
-    return v
+        return x.squeeze(1)
 
 
 class TRNet(nn.Module):
@@ -170,9 +154,13 @@ class TRNet(nn.Module):
         self.text = TextEncoder(cfg)
         self.decoder = nn.Linear(cfg.hidden, relation_param_count(cfg))  # h -> 263
         if attention:
-            # project h(k) to 2k dims to score it against [phi(s_i); phi(s_j)]
+            # project h(k) to 2k dims to score it against [phi(s_i); phi(s_j)]. Zero at
+            # start: uniform attention, which makes the model exactly t-RNet (the decoder is
+            # linear), so training can begin with the cheap attention-free forward.
             self.attn = nn.Linear(cfg.hidden, 2 * cfg.embed_dim, bias=False)
-        self.head = OutputHead(cfg.head, cfg.planner)
+            nn.init.zeros_(self.attn.weight)
+        self.attention_on = attention  # training may switch it off while attn is still 0
+        self.head = OutputHead(cfg.head)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
 
@@ -213,7 +201,7 @@ class TRNet(nn.Module):
         words, mask, mean = self.text(tokens)                    # (B, L, 30), (B, L), (B, 30)
         word_params = self.decoder(words)                        # (B, L, 263)
         attention = None
-        if self.attention:
+        if self.attention_on:
             # alpha_ij(k) ~ exp(h(k)^T A [phi_i; phi_j]); the score splits into an i part and
             # a j part, so it costs (B, N, L) + (B, N, 8, L), not a product over all three.
             q = self.attn(words)                                 # (B, L, 2k)
@@ -250,7 +238,7 @@ class TCNN(nn.Module):
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)
         self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + 3)  # 66 for k = 7
-        self.head = OutputHead(cfg.head, cfg.planner)
+        self.head = OutputHead(cfg.head)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b, h, w = grids.shape
