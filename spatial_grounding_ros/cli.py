@@ -17,7 +17,7 @@ def cmd_train(args) -> int:
     from .training import TrainConfig, train_supervised
 
     tc = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr, seed=args.seed,
-                     threads=args.threads)
+                     threads=args.threads, attention_warmup=args.attention_warmup)
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     print(json.dumps({"checkpoint": str(path), **summary}, indent=2))
     return 0
@@ -72,7 +72,8 @@ def cmd_demo(args) -> int:
 def cmd_reproduce(args) -> int:
     from .reproduce import reproduce_value_maps
 
-    reproduce_value_maps(args.data, args.out, args.epochs_scale, args.tasks, args.models)
+    reproduce_value_maps(args.data, args.out, args.epochs_scale, args.tasks, args.models,
+                         args.threads)
     return 0
 
 
@@ -96,7 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--data", default=DEFAULT_DATA)
     t.add_argument("--out", default="out")
     t.add_argument("--epochs", type=int, default=None)
-    t.add_argument("--batch-size", type=int, default=512)
+    t.add_argument("--batch-size", type=int, default=64)
+    t.add_argument("--attention-warmup", type=float, default=0.85,
+                   help="share of epochs t-RNetAttn trains with (still uniform) attention off")
     t.add_argument("--lr", type=float, default=1e-3)
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--threads", type=int, default=2)
@@ -124,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--models", nargs="+", default=list(MODELS))
     r.add_argument("--epochs-scale", type=float, default=1.0,
                    help="multiply every epoch budget (e.g. 0.1 for a quick check)")
+    r.add_argument("--threads", type=int, default=2, help="torch threads per training run")
     r.set_defaults(func=cmd_reproduce)
 
     for register in _extensions():

@@ -3,6 +3,7 @@
 t-RNetAttn and t-CNN checkpoints in the package."""
 from __future__ import annotations
 
+import fcntl
 import json
 import platform
 import shutil
@@ -57,16 +58,16 @@ def markdown_table(rows: list[dict]) -> str:
 
 def reproduce_value_maps(data_dir: str, out: str, epochs_scale: float = 1.0,
                          tasks=("pw-local", "pw-global", "pw", "isi"),
-                         models=("t-rnet-attn", "t-rnet", "t-cnn", "t-uvfa")) -> list[dict]:
+                         models=("t-rnet-attn", "t-rnet", "t-cnn", "t-uvfa"),
+                         threads: int = 2) -> list[dict]:
     out = Path(out)
     ckpt_dir = out / "checkpoints"
     results_path = out / "value_map.json"
-    previous = json.loads(results_path.read_text())["runs"] if results_path.is_file() else []
-    runs = {(r["task"], r["model"]): r for r in previous}
+    rows = []
     for task in tasks:
         test = load_task(task, "test", data_dir)
         for model_name in models:
-            tc = TrainConfig(epochs=max(1, int(EPOCHS[task] * epochs_scale)))
+            tc = TrainConfig(epochs=max(1, int(EPOCHS[task] * epochs_scale)), threads=threads)
             path, summary = train_supervised(task, model_name, data_dir, ckpt_dir, tc)
             loaded = load_checkpoint(path)
             row = {"task": task, "model": model_name, **summary,
@@ -76,20 +77,27 @@ def reproduce_value_maps(data_dir: str, out: str, epochs_scale: float = 1.0,
             row["forward_seconds_one_map"] = forward_latency(loaded.model, g1, tokens[:1])
             row["forward_seconds_batch_512"] = forward_latency(
                 loaded.model, torch.from_numpy(test.grids[:512]), tokens, repeats=5)
-            runs[(task, model_name)] = row
             if model_name in SHIPPED:
                 PACKAGED_DIR.mkdir(exist_ok=True)
                 shutil.copy(path, PACKAGED_DIR / path.name)
             print(f"{task} {model_name}: test {row['test']}", flush=True)
-            _write(results_path, runs)
-    return list(runs.values())
+            merge_results(results_path, row)
+            rows.append(row)
+    return rows
 
 
-def _write(results_path: Path, runs: dict) -> None:
-    order = {t: i for i, t in enumerate(("pw-local", "pw-global", "pw", "isi"))}
-    rows = sorted(runs.values(), key=lambda r: (order.get(r["task"], 9), r["model"]))
+def merge_results(results_path: Path, row: dict) -> None:
+    """Add or replace one (task, model) row; runs of several processes (one per task) may
+    share the file, so the read-modify-write happens under a lock."""
     results_path.parent.mkdir(parents=True, exist_ok=True)
-    meta = {"command": "make reproduce", "machine": platform.processor() or platform.machine(),
-            "torch_threads": torch.get_num_threads(), "torch": torch.__version__}
-    results_path.write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
-    results_path.with_suffix(".md").write_text(markdown_table(rows))
+    with open(results_path.with_suffix(".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        runs = json.loads(results_path.read_text())["runs"] if results_path.is_file() else []
+        runs = {(r["task"], r["model"]): r for r in runs}
+        runs[(row["task"], row["model"])] = row
+        order = {t: i for i, t in enumerate(("pw-local", "pw-global", "pw", "isi"))}
+        rows = sorted(runs.values(), key=lambda r: (order.get(r["task"], 9), r["model"]))
+        meta = {"command": "make reproduce", "machine": platform.processor() or platform.machine(),
+                "torch": torch.__version__}
+        results_path.write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
+        results_path.with_suffix(".md").write_text(markdown_table(rows))
