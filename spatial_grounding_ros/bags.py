@@ -305,8 +305,3 @@ def register_cli(sub) -> None:
                        help=f"{MSGTYPES[role]} topic (default: {name!r} in any namespace)")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
     p.set_defaults(func=cmd_eval_bag)
-    try:
-        from .ros.demo import register_cli as register_demo
-    except ImportError:  # rclpy absent: the closed-loop demo needs it
-        return
-    register_demo(sub)

@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 DEFAULT_DATA = "../shared/data"
 
@@ -41,31 +40,6 @@ def cmd_eval(args) -> int:
     else:
         print(f"{loaded.name} on {args.task} {args.split} (n={metrics['n']}): "
               f"MSE {metrics['mse']:.3f}  PQ {metrics['pq']:.3f}  MD {metrics['md']:.2f}")
-    return 0
-
-
-def cmd_demo(args) -> int:
-    from . import world
-    from .generator import generate
-    from .grounder import Grounder
-    from .plots import plot_grounding
-
-    grounder = Grounder.from_checkpoint(args.checkpoint)
-    data = generate(args.episodes, seed=args.seed, mode="mixed")
-    out = Path(args.out)
-    preds = []
-    for i in range(len(data)):
-        g = grounder.ground(data.grids[i], data.instructions[i])
-        preds.append(g.values)
-        true_goal = tuple(int(x) for x in data.goals[i])
-        err = abs(g.goal[0] - true_goal[0]) + abs(g.goal[1] - true_goal[1])
-        png = plot_grounding(out / f"episode_{i}.png", data.grids[i], grounder.entities, g.values,
-                             g.relation_map, data.instructions[i], g.goal, true_goal)
-        print(f"[{i}] {data.instructions[i]!r}: goal {g.goal}, true {true_goal}, "
-              f"Manhattan error {err} -> {png}")
-    m = world.evaluate_maps(preds, data.values, data.rewards, data.terminal)
-    print(f"summary over {m['n']} generated worlds: MSE {m['mse']:.3f}  PQ {m['pq']:.3f}  "
-          f"MD {m['md']:.2f}")
     return 0
 
 
@@ -113,13 +87,6 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--json", action="store_true", help="print exactly one JSON object")
     e.set_defaults(func=cmd_eval)
 
-    d = sub.add_parser("demo", help="ground generated worlds with a packaged checkpoint")
-    d.add_argument("--checkpoint", default="pw_t-rnet-attn")
-    d.add_argument("--episodes", type=int, default=5)
-    d.add_argument("--seed", type=int, default=7)
-    d.add_argument("--out", default="demo_out")
-    d.set_defaults(func=cmd_demo)
-
     r = sub.add_parser("reproduce", help="train and evaluate the value-map table")
     r.add_argument("--data", default=DEFAULT_DATA)
     r.add_argument("--out", default="results")
@@ -136,17 +103,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _extensions():
-    """Subcommands defined next to the code they drive (bench, RL, bags)."""
-    found = []
-    for module in ("bench", "rl", "bags"):
-        try:
-            mod = __import__(f"{__package__}.{module}", fromlist=["register_cli"])
-        except ModuleNotFoundError as exc:
-            if exc.name != f"{__package__}.{module}":
-                raise
-            continue
-        found.append(mod.register_cli)
-    return found
+    """Subcommands defined next to the code they drive: bench, RL, bags, and the closed-loop
+    demo, which needs rclpy (without it, every other subcommand still works)."""
+    from . import bags, bench, rl
+
+    found = [bench.register_cli, rl.register_cli, bags.register_cli]
+    try:
+        from .ros import demo
+    except ImportError:
+        return found
+    return found + [demo.register_cli]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -63,10 +63,3 @@ def test_corrupt_and_foreign_checkpoints_are_one_line(tmp_path, data_dir):
         pytest.skip("no packaged ISI checkpoint")
     assert_one_line_error(run("eval", "--checkpoint", str(isi), "--task", "pw-local",
                               "--data", str(data_dir)), "isi_t-cnn.pt", "entity table")
-
-
-def test_open_loop_demo_runs_without_data(tmp_path):
-    r = run("demo", "--episodes", "2", "--out", str(tmp_path), "--checkpoint", "pw_t-rnet-attn")
-    assert r.returncode == 0, r.stderr
-    assert "summary over 2" in r.stdout
-    assert len(list(tmp_path.glob("*.png"))) == 2

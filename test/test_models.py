@@ -1,5 +1,4 @@
 """Models: the paper's sizes, gradient flow into every module, batching, any map size."""
-import numpy as np
 import pytest
 import torch
 

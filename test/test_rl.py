@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 import torch
 
-from spatial_grounding_ros import cli, world
+from spatial_grounding_ros import cli
 from spatial_grounding_ros.checkpoints import load_checkpoint
-from spatial_grounding_ros.env import GridWorldEnv
 from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.rl import RLConfig, ReplayBuffer, act, fitted_value_step, train_rl
 from spatial_grounding_ros.text import Vocabulary

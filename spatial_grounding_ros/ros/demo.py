@@ -219,8 +219,7 @@ def cmd_closed_loop_demo(args) -> int:
 def register_cli(sub) -> None:
     from ..cli import DEFAULT_DATA
 
-    d = sub.add_parser("closed-loop-demo",
-                       help="gridworld + grounder nodes in a closed loop, recorded to a bag")
+    d = sub.add_parser("demo", help="gridworld + grounder nodes in a closed loop, recorded to a bag")
     d.add_argument("--episodes", type=int, default=5)
     d.add_argument("--seed", type=int, default=7)
     d.add_argument("--data", default=DEFAULT_DATA,
