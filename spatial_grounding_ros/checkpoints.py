@@ -58,7 +58,9 @@ def load_checkpoint(name: str | Path, expect_model: str | None = None,
     try:
         blob = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types on a corrupt or foreign file
-        raise ValueError(f"{path}: not a readable checkpoint ({type(exc).__name__}: {exc})") from exc
+        # torch's own text runs to several lines (and suggests weights_only=False): keep one
+        reason = (str(exc).strip().splitlines() or [""])[0][:120]
+        raise ValueError(f"{path}: not a readable checkpoint ({type(exc).__name__}: {reason})") from exc
     if not isinstance(blob, dict) or "header" not in blob or "state_dict" not in blob:
         raise ValueError(f"{path}: not a spatial_grounding_ros checkpoint (no header)")
     header = blob["header"]
