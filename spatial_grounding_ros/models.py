@@ -44,6 +44,7 @@ class ModelConfig:
     uvfa_channels: int = 16       # t-UVFA state encoder channels
     head: tuple = (3, 6, 12, 6, 3)  # output network: 3x3 conv channels before the last conv
     radius: int = 1               # relation neighbourhood (1: the paper's 8 neighbours)
+    head_slope: float = 0.01      # negative slope of the head's ReLUs (0: plain ReLU)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -55,6 +56,7 @@ class ModelConfig:
         d = dict(d)
         d["mlp"] = tuple(d.get("mlp", (10, 10)))
         d["head"] = tuple(d.get("head", ()))
+        d.setdefault("head_slope", 0.0)  # checkpoints written before the field: plain ReLU
         return cls(**d)
 
 
@@ -125,11 +127,14 @@ class OutputHead(nn.Module):
     goal's value spread over a 10x10 map. No final ReLU: true values go negative (puddles,
     down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes."""
 
-    def __init__(self, channels: tuple = ()):
+    def __init__(self, channels: tuple = (), slope: float = 0.0):
         super().__init__()
         sizes = [2, *channels, 1]
         self.convs = nn.ModuleList(nn.Conv2d(a, b, kernel_size=3, padding=1)
                                    for a, b in zip(sizes[:-1], sizes[1:]))
+        # A leaky slope: with 3-channel layers, plain ReLUs sometimes all die early and the
+        # map goes constant (PW global runs stuck at train MSE 1.5 while PW local learned).
+        self.slope = slope
 
     def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
         b, h, w = z1.shape
@@ -138,7 +143,7 @@ class OutputHead(nn.Module):
         for n, conv in enumerate(self.convs):
             x = conv(x)
             if n < len(self.convs) - 1:
-                x = torch.relu(x)
+                x = F.leaky_relu(x, self.slope)
         return x.squeeze(1)
 
 
@@ -160,7 +165,7 @@ class TRNet(nn.Module):
             self.attn = nn.Linear(cfg.hidden, 2 * cfg.embed_dim, bias=False)
             nn.init.zeros_(self.attn.weight)
         self.attention_on = attention  # training may switch it off while attn is still 0
-        self.head = OutputHead(cfg.head)
+        self.head = OutputHead(cfg.head, cfg.head_slope)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
 
@@ -238,7 +243,7 @@ class TCNN(nn.Module):
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)
         self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + 3)  # 66 for k = 7
-        self.head = OutputHead(cfg.head)
+        self.head = OutputHead(cfg.head, cfg.head_slope)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b, h, w = grids.shape
