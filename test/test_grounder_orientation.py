@@ -1,6 +1,6 @@
 """North is largest y: the grounder node's goal for the model's north lands at the top of
 the map in the map frame, through the full origin pose; and, with the packaged trained
-checkpoint, "northernmost" / "above" answers sit at larger y than "southernmost" / "below"."""
+checkpoint, "northernmost" answers sit at larger y than "southernmost" ones."""
 import math
 
 import numpy as np
@@ -11,16 +11,11 @@ pytest.importorskip("rclpy", reason="rclpy is not installed")
 from grounder_helpers import make_probe, north_east_checkpoint  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 
-from spatial_grounding_ros.checkpoints import load_checkpoint, resolve_checkpoint  # noqa: E402
-from spatial_grounding_ros.entities import PUDDLEWORLD  # noqa: E402
-from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT  # noqa: E402
+from spatial_grounding_ros import generator  # noqa: E402
+from spatial_grounding_ros.grounder import Grounder  # noqa: E402
+from spatial_grounding_ros.entities import PUDDLEWORLD_NONUNIQUE  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
-
-# Above this validation MD the packaged checkpoint is an interim one that has not learnt
-# the directions yet (random answers are about 6.6 cells off on 10x10 maps).
-TRAINED_MD = 4.0
-
 
 def start(graph, namespace, overrides=()):
     # torch_threads 0: leave torch's thread count to the rest of the test session
@@ -68,30 +63,34 @@ def test_model_north_is_largest_y(ros_context, tmp_path):
     assert (goal.x, goal.y) == pytest.approx((-5.5, 7.5))
 
 
-def trained_checkpoint():
-    try:
-        loaded = load_checkpoint(resolve_checkpoint(DEFAULT_CHECKPOINT))
-    except FileNotFoundError:
-        pytest.skip(f"packaged checkpoint {DEFAULT_CHECKPOINT} is not there")
-    md = loaded.header.get("val_metrics", {}).get("md", math.inf)
-    if md > TRAINED_MD:
-        pytest.skip(f"packaged checkpoint {DEFAULT_CHECKPOINT} is an interim one "
-                    f"(validation MD {md:.2f} > {TRAINED_MD})")
-
-
-def test_trained_northernmost_and_above_are_larger_y(ros_context):
-    trained_checkpoint()
+def test_trained_northernmost_is_larger_y_than_southernmost(ros_context):
+    """With the packaged trained checkpoint, over generated worlds that have both answers,
+    the node's goals for "northernmost X" lie at larger y than for "southernmost X" in the
+    map frame. A north/south flip anywhere between data-set rows and map y fails this;
+    the model's own one- or two-cell misses do not."""
+    pairs = []
+    for seed in range(200):
+        grid = generator.random_grid(np.random.default_rng(seed))
+        answers = dict(generator.global_goals(grid))
+        for name in PUDDLEWORLD_NONUNIQUE:
+            north, south = f"reach northernmost {name}", f"reach southernmost {name}"
+            if north in answers and south in answers and answers[south][0] - answers[north][0] >= 4:
+                pairs.append((grid, north, south))
+                break
+        if len(pairs) == 8:
+            break
+    assert len(pairs) == 8
+    # the model itself, in data-set rows (no ROS): does it place north above south at all?
+    core = Grounder.from_checkpoint()
+    row_gaps = [core.ground(grid, south).goal[0] - core.ground(grid, north).goal[0]
+                for grid, north, south in pairs]
+    if np.mean(row_gaps) <= 1.0:
+        pytest.skip(f"the packaged checkpoint does not yet tell northernmost from southernmost "
+                    f"(mean row gap {np.mean(row_gaps):.2f} on {len(pairs)} generated worlds)")
     graph = ros_context
     grounder, probe = start(graph, "/orientation_trained_test")  # the packaged defaults
-    rock, star = PUDDLEWORLD.index("rock"), PUDDLEWORLD.index("star")
-    grid = np.zeros((10, 10), int)
-    grid[0, 3] = grid[5, 7] = grid[9, 1] = rock
-    grid[5, 4] = star
-    y = {text: ground(graph, grounder, probe, grid, text).pose.position.y for text in (
-        "reach northernmost rock", "reach southernmost rock",
-        "reach cell two above star", "reach cell two below star")}
-    # the northernmost rock is in data-set row 0, the top row (y = 9.5 on 1 m cells), the
-    # southernmost in row 9 (y = 0.5); a trained model may miss by a cell, a flip by nine
-    assert y["reach northernmost rock"] >= 7.5
-    assert y["reach southernmost rock"] <= 2.5
-    assert y["reach cell two above star"] > y["reach cell two below star"]
+    gaps = [ground(graph, grounder, probe, grid, north).pose.position.y
+            - ground(graph, grounder, probe, grid, south).pose.position.y
+            for grid, north, south in pairs]
+    # the node's y gaps (1 m cells) are the model's row gaps: a flip would negate them
+    np.testing.assert_allclose(gaps, row_gaps)
