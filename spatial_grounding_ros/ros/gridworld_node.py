@@ -15,12 +15,10 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-import rclpy
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Bool, Float32, Float32MultiArray, Header, Int32, String
@@ -29,6 +27,7 @@ from std_srvs.srv import Trigger
 from .. import world
 from ..env import GridWorldEnv, load_episodes
 from . import convert
+from .node_support import report, spin
 from .package_files import find_config
 
 NODE_NAME = "gridworld"
@@ -184,35 +183,12 @@ class GridWorldNode(Node):
             return
         self.move(int(self.path_policy[self.env.agent]))
 
-    def report(self, part: str, level: bytes, message: str) -> None:
-        # one call site per severity: rclpy refuses to change a call site's severity
-        if level == DiagnosticStatus.OK:
-            self.get_logger().info(message)
-        elif level == DiagnosticStatus.WARN:
-            self.get_logger().warning(message)
-        else:
-            self.get_logger().error(message)
-        status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: {part}",
-                                  message=message, hardware_id="")
-        self.diagnostics_pub.publish(DiagnosticArray(header=self.header(), status=[status]))
+    def report(self, part: str, level: bytes, message: str, **values) -> None:
+        report(self, self.diagnostics_pub, part, level, message, **values)
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = GridWorldNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ValueError, FileNotFoundError) as exc:  # bad source, data dir or parameters
-        print(f"gridworld: error: {exc}", file=sys.stderr)
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return spin(GridWorldNode, "gridworld", args)
 
 
 if __name__ == "__main__":

@@ -11,13 +11,11 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-import rclpy
 import torch
 import yaml
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float32MultiArray, Header, String
@@ -26,6 +24,7 @@ from ..checkpoints import resolve_checkpoint
 from ..entities import EntityTable
 from ..grounder import Grounder
 from . import convert
+from .node_support import report, spin
 from .package_files import find_config
 
 NODE_NAME = "spatial_grounder"
@@ -147,37 +146,11 @@ class GrounderNode(Node):
                     goal_row=result.goal[0], goal_col=result.goal[1])
 
     def report(self, part: str, level: bytes, message: str, **values) -> None:
-        """Log and publish one diagnostic status for `part` (entity_map, instruction, ...)."""
-        # one call site per severity: rclpy refuses to change a call site's severity
-        if level == DiagnosticStatus.OK:
-            self.get_logger().info(message)
-        elif level == DiagnosticStatus.WARN:
-            self.get_logger().warning(message)
-        else:
-            self.get_logger().error(message)
-        status = DiagnosticStatus(level=level, name=f"{self.get_fully_qualified_name()}: {part}",
-                                  message=message, hardware_id="")
-        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-        self.diagnostics_pub.publish(DiagnosticArray(
-            header=Header(stamp=self.get_clock().now().to_msg()), status=[status]))
+        report(self, self.diagnostics_pub, part, level, message, **values)
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = GrounderNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ValueError, FileNotFoundError) as exc:  # bad checkpoint, table or config
-        print(f"grounder: error: {exc}", file=sys.stderr)
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return spin(GrounderNode, "grounder", args)
 
 
 if __name__ == "__main__":
