@@ -1,0 +1,57 @@
+"""The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
+test maps with the goal that `spatial-grounding eval` predicts for them (the argmax of the
+same model's value map, computed through the training code's batched predict)."""
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy is not installed")
+
+from grounder_helpers import make_probe  # noqa: E402
+
+from spatial_grounding_ros import world  # noqa: E402
+from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
+from spatial_grounding_ros.datasets import load_task  # noqa: E402
+from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT  # noqa: E402
+from spatial_grounding_ros.ros import convert  # noqa: E402
+from spatial_grounding_ros.training import predict  # noqa: E402
+
+NAMESPACE = "/console_test"
+
+
+def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_context):
+    exe = Path(sys.executable).parent / "grounder"
+    if not exe.is_file():
+        pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
+    test = load_task("pw-local", "test", data_dir).subset(np.arange(0, 399, 57))
+    loaded = load_checkpoint(DEFAULT_CHECKPOINT)
+    expected = world.argmax_cells(predict(loaded.model, loaded.vocab, test))
+    process = subprocess.Popen([str(exe), "--ros-args", "-r", f"__ns:={NAMESPACE}"],
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        graph = ros_context
+        probe = graph.add(make_probe(graph.context, NAMESPACE, f"{NAMESPACE}/spatial_grounder"))
+        assert graph.wait_for(lambda: probe.connected() or process.poll() is not None, timeout=45)
+        assert process.poll() is None, process.stdout.read()
+        for grid, text, cell in zip(test.grids, test.instructions, expected):
+            probe.publish_map(grid)
+            time.sleep(0.3)  # the map and the instruction travel on different topics
+            before = probe.counts()
+            probe.publish_instruction(text)
+            assert graph.wait_for(lambda: probe.new("goals", before), timeout=15), text
+            position = probe.new("goals", before)[0].pose.position
+            centre = convert.cell_centre(tuple(int(c) for c in cell), convert.map_info(grid.shape))
+            assert (position.x, position.y) == pytest.approx(centre[:2]), text
+    finally:
+        process.send_signal(signal.SIGINT)
+        try:
+            output, _ = process.communicate(timeout=15)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            output, _ = process.communicate()
+    assert process.returncode == 0, output
