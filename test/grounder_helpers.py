@@ -3,6 +3,8 @@ node that talks to the grounder over DDS and keeps everything it hears."""
 from __future__ import annotations
 
 import itertools
+import signal
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -112,3 +114,14 @@ def make_probe(context, namespace: str, grounder_name: str):
             self.instruction_pub.publish(String(data=text))
 
     return GrounderProbe()
+
+
+def interrupt(process) -> tuple[int, str]:
+    """Stop a node process as Ctrl-C would (killing it if it hangs); its exit code and output."""
+    process.send_signal(signal.SIGINT)
+    try:
+        output, _ = process.communicate(timeout=15)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        output, _ = process.communicate()
+    return process.returncode, output

@@ -5,7 +5,6 @@ config from the install's share directory, and answers a request."""
 import glob
 import os
 import shutil
-import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -15,7 +14,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 ament_packages = pytest.importorskip("ament_index_python.packages")
 
-from grounder_helpers import make_probe, random_checkpoint  # noqa: E402
+from grounder_helpers import interrupt, make_probe, random_checkpoint  # noqa: E402
 
 from spatial_grounding_ros.checkpoints import load_checkpoint, resolve_checkpoint  # noqa: E402
 from spatial_grounding_ros.generator import generate  # noqa: E402
@@ -114,13 +113,8 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
         assert (position.x, position.y) == pytest.approx(
             convert.cell_centre(expected, convert.map_info(grid.shape))[:2])
     finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            output, _ = process.communicate(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            output, _ = process.communicate()
-    assert process.returncode == 0, output
+        returncode, output = interrupt(process)
+    assert returncode == 0, output
     # its config came from the colcon install, not from this source tree
     share = ament_packages.get_package_share_directory(PACKAGE)
     assert f"entity table {share}/config/entities_puddleworld.yaml" in output, output

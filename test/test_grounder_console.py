@@ -1,7 +1,6 @@
 """The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
 test maps with the goal that `spatial-grounding eval` predicts for them (the argmax of the
 same model's value map, computed through the training code's batched predict)."""
-import signal
 import subprocess
 import sys
 import time
@@ -12,7 +11,7 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 
-from grounder_helpers import make_probe  # noqa: E402
+from grounder_helpers import interrupt, make_probe  # noqa: E402
 
 from spatial_grounding_ros import world  # noqa: E402
 from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
@@ -48,10 +47,5 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
             centre = convert.cell_centre(tuple(int(c) for c in cell), convert.map_info(grid.shape))
             assert (position.x, position.y) == pytest.approx(centre[:2]), text
     finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            output, _ = process.communicate(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            output, _ = process.communicate()
-    assert process.returncode == 0, output
+        returncode, output = interrupt(process)
+    assert returncode == 0, output
