@@ -160,15 +160,16 @@ def _cell(x: float, y: float, info) -> tuple[int, int] | None:
     return info.height - 1 - grid_row, col
 
 
-def _array(msg) -> np.ndarray:
-    """A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W), row 0 = north."""
+def multiarray_to_map(msg) -> np.ndarray:
+    """A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
+    row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike."""
     if len(msg.layout.dim) != 2:
         raise ValueError(f"expected a 2-D Float32MultiArray layout, got {len(msg.layout.dim)} dims")
     h, w = msg.layout.dim[0].size, msg.layout.dim[1].size
-    data = np.asarray(msg.data, dtype=np.float64)[msg.layout.data_offset:]
+    data = np.asarray(msg.data, dtype=np.float32)[msg.layout.data_offset:]
     if data.size != h * w:
         raise ValueError(f"{data.size} values for a {h}x{w} layout")
-    return data.reshape(h, w)[::-1]
+    return data.reshape(h, w)[::-1].copy()
 
 
 @dataclass
@@ -251,10 +252,10 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
             return
         ep = Episode(p["instruction"], *cells)
         if p["values"] is not None:
-            ep.values = _array(p["values"])
+            ep.values = multiarray_to_map(p["values"])
         if {"true_values", "true_rewards"} <= set(p["true"]):
-            ep.true_values = _array(p["true"]["true_values"])
-            ep.true_rewards = _array(p["true"]["true_rewards"])
+            ep.true_values = multiarray_to_map(p["true"]["true_values"])
+            ep.true_rewards = multiarray_to_map(p["true"]["true_rewards"])
         result.episodes.append(ep)
 
     for _, role, msg in events:

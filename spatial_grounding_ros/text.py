@@ -35,10 +35,6 @@ class Vocabulary:
     def encode(self, text: str) -> list[int]:
         return [self.index.get(w, UNK) for w in tokenize(text)]
 
-    def known_fraction(self, text: str) -> float:
-        ids = self.encode(text)
-        return sum(i != UNK for i in ids) / len(ids) if ids else 0.0
-
     def encode_batch(self, texts: list[str]) -> np.ndarray:
         """(B, L) int64 ids, right-padded with PAD to the longest instruction (at least 1)."""
         ids = [self.encode(t) or [UNK] for t in texts]

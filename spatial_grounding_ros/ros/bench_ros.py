@@ -20,6 +20,7 @@ from std_msgs.msg import Header, String
 from . import convert
 from .demo import executable
 from .grounder_node import LATCHED
+from .node_support import stop_processes
 
 NAMESPACE = "/bench"
 
@@ -100,11 +101,7 @@ def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str
         spinner.join(timeout=5)
         client.destroy_node()
         context.try_shutdown()
-        node_process.terminate()
-        try:
-            node_process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            node_process.kill()
+        stop_processes(node_process)
     ms = np.array(latencies) * 1e3
     return {"requests": requests, "map": f"{grid.shape[0]}x{grid.shape[1]}",
             "p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99)),

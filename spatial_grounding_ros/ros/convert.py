@@ -16,6 +16,8 @@ from geometry_msgs.msg import Pose, PoseStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 
+from ..bags import multiarray_to_map
+
 PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
 
 
@@ -134,13 +136,7 @@ def value_map_to_float32_multiarray(values: np.ndarray) -> Float32MultiArray:
 
 def float32_multiarray_to_value_map(msg: Float32MultiArray) -> np.ndarray:
     """Inverse of value_map_to_float32_multiarray: (H, W) float32, row 0 = north."""
-    if len(msg.layout.dim) != 2:
-        raise ValueError(f"expected a 2-D layout, got {len(msg.layout.dim)} dimensions")
-    height, width = msg.layout.dim[0].size, msg.layout.dim[1].size
-    data = np.asarray(msg.data, dtype=np.float32)[msg.layout.data_offset:]
-    if data.size != height * width:
-        raise ValueError(f"{data.size} values for a {height}x{width} layout")
-    return data.reshape(height, width)[::-1].copy()
+    return multiarray_to_map(msg)
 
 
 def cell_centre(cell: tuple[int, int], info: MapMetaData) -> tuple[float, float, float]:

@@ -28,6 +28,7 @@ from ..plots import plot_grounding
 from . import convert
 from .bag_recorder import BagRecorder
 from .gridworld_node import LATCHED, STEPS
+from .node_support import stop_processes
 
 RECORDED = {  # topic -> type; the first six are latched
     "entity_map": "nav_msgs/msg/OccupancyGrid", "instruction": "std_msgs/msg/String",
@@ -191,14 +192,7 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
                 executor.remove_node(node)
                 node.destroy_node()
         rclpy.try_shutdown()
-        for p in processes:
-            p.terminate()
-        for p in processes:
-            try:
-                p.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
+        stop_processes(*processes)
     summary = {"episodes": len(lines), "reached": sum(l["reached"] for l in lines),
                "md": float(np.mean([l["md"] for l in lines])) if lines else None,
                "reward": float(np.mean([l["reward"] for l in lines])) if lines else None,

@@ -22,6 +22,7 @@ from std_srvs.srv import Trigger
 
 from . import convert
 from .gridworld_node import LATCHED, STEPS
+from .node_support import stop_processes
 
 
 class GridWorldClient(Node):
@@ -129,9 +130,4 @@ def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
         client.destroy_node()
         if started_here:
             rclpy.try_shutdown()
-        node_process.terminate()
-        try:
-            node_process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            node_process.kill()
-            node_process.wait()
+        stop_processes(node_process)

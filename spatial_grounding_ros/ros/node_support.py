@@ -2,6 +2,7 @@
 node and shuts down cleanly (start-up errors are one line and exit status 1)."""
 from __future__ import annotations
 
+import subprocess
 import sys
 from typing import Callable
 
@@ -46,3 +47,15 @@ def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def stop_processes(*processes: subprocess.Popen, timeout: float = 10.0) -> None:
+    """Ask node processes to exit (SIGTERM), then kill whichever is still up after `timeout`."""
+    for p in processes:
+        p.terminate()
+    for p in processes:
+        try:
+            p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
