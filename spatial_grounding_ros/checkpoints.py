@@ -77,7 +77,10 @@ def load_checkpoint(name: str | Path, expect_model: str | None = None,
                          f"({len(entities)} kinds), not on {expect_entities.domain} "
                          f"({len(expect_entities)} kinds)")
     vocab = Vocabulary(header["vocabulary"][2:])
-    cfg = ModelConfig.from_dict(header["config"])
+    try:
+        cfg = ModelConfig.from_dict(header["config"])
+    except (TypeError, ValueError) as exc:  # a field missing, or one this code does not know
+        raise ValueError(f"{path}: {exc}") from exc
     if cfg.vocab_size != len(vocab) or cfg.n_entities != len(entities):
         raise ValueError(f"{path}: header sizes disagree (vocabulary {len(vocab)} vs "
                          f"{cfg.vocab_size}, entities {len(entities)} vs {cfg.n_entities})")

@@ -9,7 +9,7 @@ Sizes are the paper's (section 3.2, appendix A); PuddleWorld numbers in comments
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 import torch
 import torch.nn.functional as F
@@ -53,11 +53,10 @@ class ModelConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> "ModelConfig":
-        d = dict(d)
-        d["mlp"] = tuple(d.get("mlp", (10, 10)))
-        d["head"] = tuple(d.get("head", ()))
-        d.setdefault("head_slope", 0.0)  # checkpoints written before the field: plain ReLU
-        return cls(**d)
+        missing = [f.name for f in fields(cls) if f.name not in d]
+        if missing:
+            raise ValueError(f"model config lacks {', '.join(missing)}")
+        return cls(**{**d, "mlp": tuple(d["mlp"]), "head": tuple(d["head"])})
 
 
 def relation_param_count(cfg: ModelConfig) -> int:

@@ -88,6 +88,12 @@ def test_checkpoint_round_trip_and_mismatch_errors(tmp_path):
     torch.save(blob, tmp_path / "vocab.pt")
     with pytest.raises(ValueError, match="vocab"):
         load_checkpoint(tmp_path / "vocab.pt")
+    # a header without a hyper-parameter is named, never silently defaulted
+    blob = torch.load(path, weights_only=True)
+    del blob["header"]["config"]["head_slope"]
+    torch.save(blob, tmp_path / "old.pt")
+    with pytest.raises(ValueError, match="old.pt: model config lacks head_slope"):
+        load_checkpoint(tmp_path / "old.pt")
 
 
 def test_unknown_model_name():
