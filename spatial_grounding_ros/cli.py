@@ -17,7 +17,7 @@ def cmd_train(args) -> int:
 
     tc = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr, seed=args.seed,
                      threads=args.threads, attention_warmup=args.attention_warmup,
-                     synthetic=args.synthetic)
+                     synthetic=args.synthetic, mirrors=args.mirrors)
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     print(json.dumps({"checkpoint": str(path), **summary}, indent=2))
     return 0
@@ -78,6 +78,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--lr", type=float, default=1e-3)
     t.add_argument("--synthetic", type=int, default=None,
                    help="generated PuddleWorld examples added to training (default: per task)")
+    t.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
+                   help="add mirrored copies of the training examples (default: per task)")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--threads", type=int, default=2)
     t.set_defaults(func=cmd_train)

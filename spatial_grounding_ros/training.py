@@ -14,6 +14,7 @@ import torch
 from tqdm import tqdm
 
 from . import world
+from .augment import with_mirrors
 from .checkpoints import save_checkpoint
 from .datasets import GroundingSet, load_task, split_by_world
 from .generator import generate
@@ -22,11 +23,15 @@ from .text import Vocabulary
 
 
 # Epoch budgets per task (the validation split picks the best epoch within them), sized so
-# `make reproduce` fits in about an hour on 2 cores.
-EPOCHS = {"pw-local": 200, "pw-global": 200, "pw": 150, "isi": 15}
+# `make reproduce` fits in about an hour on 2 cores. PuddleWorld epochs go over the 4x
+# mirrored training set, so 50 of them are 200 passes' worth of optimizer steps.
+EPOCHS = {"pw-local": 50, "pw-global": 50, "pw": 40, "isi": 15}
 # Generated PuddleWorld examples added to each task's training part (our generator's
 # synthetic phrasing; validation and test stay human): test MD 2.62 -> 2.52 for t-RNet.
 SYNTHETIC = {"pw-local": 2000, "pw-global": 2000, "pw": 2000, "isi": 0}
+# Add the left-right, top-bottom and both-ways mirror images of every training example
+# (augment.py). ISI is off: it has 8x PuddleWorld's examples and a 15-epoch budget already.
+MIRRORS = {"pw-local": True, "pw-global": True, "pw": True, "isi": False}
 
 
 @dataclass
@@ -41,6 +46,7 @@ class TrainConfig:
     val_fraction: float = 0.1    # of the training worlds
     attention_warmup: float = 0.85  # share of epochs t-RNetAttn trains with attention off
     synthetic: int | None = None  # generated examples added to training; None: SYNTHETIC[task]
+    mirrors: bool | None = None   # add mirrored copies of training examples; None: MIRRORS[task]
     seed: int = 0
     threads: int = 2
 
@@ -89,7 +95,8 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
     """Train `model_name` on `task`, keep the epoch with the lowest validation MSE, write
     `out/<task>_<model>.pt`; returns its path and a summary."""
     tc = TrainConfig(**{**vars(tc), "epochs": tc.epochs or EPOCHS[task],
-                        "synthetic": SYNTHETIC[task] if tc.synthetic is None else tc.synthetic})
+                        "synthetic": SYNTHETIC[task] if tc.synthetic is None else tc.synthetic,
+                        "mirrors": MIRRORS[task] if tc.mirrors is None else tc.mirrors})
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = train_data if train_data is not None else load_task(task, "train", data_dir)
@@ -100,7 +107,10 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
         mode = {"pw-local": "local", "pw-global": "global"}.get(task, "mixed")
         train = GroundingSet.concat(train.name, [train, generate(tc.synthetic, seed=10_000 + tc.seed,
                                                                  mode=mode)])
-    vocab = Vocabulary.build(data.instructions)
+    if tc.mirrors:
+        train = with_mirrors(train)
+    # mirrored instructions add the opposites of direction words seen only one way
+    vocab = Vocabulary.build(list(data.instructions) + train.instructions)
     cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab),
                       embed_dim=data.entities.embed_dim, **model_options)
     model = build_model(model_name, cfg)
