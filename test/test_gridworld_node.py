@@ -135,6 +135,9 @@ def test_closed_loop_demo(tmp_path, capsys):
                        step_period=0.02)
     out = capsys.readouterr().out
     assert summary["episodes"] == 2
+    # each episode's outcome is its own: terminated exactly when it ended on the true goal
+    for episode in summary["per_episode"]:
+        assert episode["reached"] == (episode["end"] == episode["truth"]), episode
     assert [line[:3] for line in out.splitlines() if line.startswith("[")] == ["[0]", "[1]"]
     assert (tmp_path / "episode_0.png").stat().st_size > 1000
     assert summary["from_bag"]["n"] == 2

@@ -62,6 +62,7 @@ class DemoWatcher(Node):
         self.goals: list[PoseStamped] = []
         self.poses: list[PoseStamped] = []
         self.rewards: list[float] = []
+        self.terminated_msgs = 0
         self.terminated = False
         self.map_msg: OccupancyGrid | None = None
         self.values: Float32MultiArray | None = None
@@ -86,12 +87,20 @@ class DemoWatcher(Node):
         self.reset_client = self.create_client(Trigger, "reset_episode")
 
     def on_terminated(self, msg: Bool) -> None:
+        self.terminated_msgs += 1
         self.terminated = self.terminated or msg.data
+
+    def moves_complete(self) -> bool:
+        """Every move seen so far (a pose after the start) has its reward and terminated flag
+        too: they come on other topics and may trail the pose."""
+        moves = len(self.poses) - 1
+        return moves >= 0 and len(self.rewards) >= moves and self.terminated_msgs >= moves
 
     def clear(self) -> None:
         self.goals.clear()
         self.poses.clear()
         self.rewards.clear()
+        self.terminated_msgs = 0
         self.terminated = False
         self.values = self.relation = None
 
@@ -163,10 +172,10 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
 
             def settled() -> bool:
                 at = watcher.cell(watcher.poses[-1]) if watcher.poses else None
-                return watcher.terminated or at == goal or len(watcher.rewards) >= step_limit
+                return watcher.moves_complete() and (
+                    watcher.terminated or at == goal or len(watcher.rewards) >= step_limit)
 
             spin_until(executor, settled, step_limit * step_period + 10, "agent arrival")
-            executor.spin_once(timeout_sec=0.05)
             path = [watcher.cell(p) for p in watcher.poses]
             truth = watcher.cell(watcher.true_goal)
             error = abs(goal[0] - truth[0]) + abs(goal[1] - truth[1])
@@ -184,8 +193,8 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
                     f"{outcome}, "
                     f"Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}")
             print(line, flush=True)
-            lines.append({"goal": goal, "truth": truth, "reached": watcher.terminated,
-                          "md": error, "reward": reward})
+            lines.append({"goal": goal, "truth": truth, "end": path[-1],
+                          "reached": watcher.terminated, "md": error, "reward": reward})
     finally:
         for node in (watcher, recorder):
             if node is not None:
@@ -196,7 +205,8 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
     summary = {"episodes": len(lines), "reached": sum(l["reached"] for l in lines),
                "md": float(np.mean([l["md"] for l in lines])) if lines else None,
                "reward": float(np.mean([l["reward"] for l in lines])) if lines else None,
-               "bag": str(bag_path), "from_bag": evaluate_bag(bag_path).metrics()}
+               "bag": str(bag_path), "from_bag": evaluate_bag(bag_path).metrics(),
+               "per_episode": lines}
     bag = summary["from_bag"]
     print(f"summary: {summary['reached']}/{summary['episodes']} episodes reached the goal, "
           f"mean Manhattan error {summary['md']:.2f}, mean reward {summary['reward']:.2f}; "
