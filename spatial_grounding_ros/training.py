@@ -109,7 +109,7 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
                                                                  mode=mode)])
     if tc.mirrors:
         train = with_mirrors(train)
-    # mirrored instructions add the opposites of direction words seen only one way
+    # from everything trained on: generated phrasing and the mirrors' swapped direction words
     vocab = Vocabulary.build(list(data.instructions) + train.instructions)
     cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab),
                       embed_dim=data.entities.embed_dim, **model_options)
