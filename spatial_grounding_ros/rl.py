@@ -22,6 +22,7 @@ stand out, are not drowned by the many wandering cells (plain mean square: prior
 """
 from __future__ import annotations
 
+import argparse
 import copy
 import functools
 import json
@@ -34,11 +35,12 @@ import torch
 
 from . import world
 from .checkpoints import save_checkpoint
+from .augment import SWAP_LEFT_RIGHT, SWAP_UP_DOWN, swap_words
 from .datasets import TASKS, GroundingSet
 from .env import GridWorldEnv, load_episodes
 from .models import MODELS, ModelConfig, build_model
 from .text import Vocabulary
-from .training import predict
+from .training import MIRRORS, predict
 
 RL_TASKS = ("pw-local", "pw-global", "isi")
 
@@ -59,18 +61,37 @@ class RLConfig:
     eps_start: float = 1.0          # epsilon-greedy exploration, decayed linearly ...
     eps_end: float = 0.1
     eps_fraction: float = 0.5       # ... over this fraction of the episodes
+    attention_warmup: float = 0.85  # share of episodes t-RNetAttn runs with (still uniform) attention off
+    mirrors: bool | None = None     # also learn from the mirror images of each map; None: MIRRORS[task]
     seed: int = 0
     threads: int = 1
+
+
+# (flip rows, flip columns, word swap tables) of the three mirror images (augment.py)
+MIRROR_IMAGES = ((False, True, (SWAP_LEFT_RIGHT,)), (True, False, (SWAP_UP_DOWN,)),
+                 (True, True, (SWAP_LEFT_RIGHT, SWAP_UP_DOWN)))
+
+
+def mirrored_instruction(text: str, tables: tuple) -> str:
+    for table in tables:
+        text = swap_words(text, table)
+    return text
 
 
 class ReplayBuffer:
     """Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
     per distinct pair. Because moves are deterministic, the cells entered in a map, with
     their observed reward and terminal flag, are all a regression step needs: `visited`,
-    `reward`, `terminal` (per map, (H, W)) are kept up to date from the transitions."""
+    `reward`, `terminal` (per map, (H, W)) are kept up to date from the transitions.
 
-    def __init__(self, shape: tuple[int, int]):
+    With `mirrors`, each map also gets its three mirror images (direction words swapped),
+    and every observed cell is recorded in them too: the flipped grid MDP has the flipped
+    rewards, so the agent's own experience is reused four times without another step."""
+
+    def __init__(self, shape: tuple[int, int], mirrors: bool = False):
         self.shape = shape
+        self.mirrors = mirrors
+        self.images: dict[int, list[tuple[int, bool, bool]]] = {}  # map id -> its mirror ids
         self.key_to_id: dict[tuple[bytes, str], int] = {}
         self.grids: list[np.ndarray] = []
         self.instructions: list[str] = []
@@ -79,23 +100,37 @@ class ReplayBuffer:
         self.terminal: list[np.ndarray] = []
         self.transitions: list[tuple[int, int, int, float, int, bool]] = []
 
+    def _new_map(self, grid: np.ndarray, instruction: str) -> int:
+        self.grids.append(np.ascontiguousarray(grid, np.int64))
+        self.instructions.append(instruction)
+        for table, dtype in ((self.visited, bool), (self.reward, np.float32),
+                             (self.terminal, bool)):
+            table.append(np.zeros(self.shape, dtype))
+        return len(self.grids) - 1
+
     def map_id(self, grid: np.ndarray, instruction: str) -> int:
         key = (np.asarray(grid, np.int64).tobytes(), instruction)
         if key not in self.key_to_id:
-            self.key_to_id[key] = len(self.grids)
-            self.grids.append(np.asarray(grid, np.int64))
-            self.instructions.append(instruction)
-            for table, dtype in ((self.visited, bool), (self.reward, np.float32),
-                                 (self.terminal, bool)):
-                table.append(np.zeros(self.shape, dtype))
+            i = self.key_to_id[key] = self._new_map(grid, instruction)
+            self.images[i] = [] if not self.mirrors else [
+                (self._new_map(np.flip(grid, axis=tuple(a for a, f in enumerate((rows, cols)) if f)),
+                               mirrored_instruction(instruction, tables)), rows, cols)
+                for rows, cols, tables in MIRROR_IMAGES]
         return self.key_to_id[key]
 
+    @property
+    def n_observed(self) -> int:
+        """Maps the agent has played (not counting mirror images)."""
+        return len(self.key_to_id)
+
     def add(self, map_id: int, s: tuple, a: int, r: float, s2: tuple, done: bool) -> None:
-        w = self.shape[1]
+        h, w = self.shape
         self.transitions.append((map_id, s[0] * w + s[1], a, r, s2[0] * w + s2[1], done))
-        self.visited[map_id][s2] = True
-        self.reward[map_id][s2] = r
-        self.terminal[map_id][s2] = done
+        for i, rows, cols in [(map_id, False, False), *self.images[map_id]]:
+            cell = (h - 1 - s2[0] if rows else s2[0], w - 1 - s2[1] if cols else s2[1])
+            self.visited[i][cell] = True
+            self.reward[i][cell] = r
+            self.terminal[i][cell] = done
 
     def sample_maps(self, rng: np.random.Generator, n: int) -> np.ndarray:
         return rng.choice(len(self.grids), size=min(n, len(self.grids)), replace=False)
@@ -201,19 +236,28 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
     train = train_data if train_data is not None else load_episodes(task, "train", str(data_dir))
     test = test_data if test_data is not None else load_episodes(task, "test", str(data_dir))
     shape = tuple(train.grids.shape[1:])
-    cfg = RLConfig(**{**asdict(cfg), "step_limit": cfg.step_limit or 5 * max(shape)})
-    vocab = Vocabulary.build(train.instructions)
+    cfg = RLConfig(**{**asdict(cfg), "step_limit": cfg.step_limit or 5 * max(shape),
+                      "mirrors": MIRRORS.get(task, True) if cfg.mirrors is None else cfg.mirrors})
+    # the mirror images' swapped direction words are trained on too
+    vocab = Vocabulary.build(list(train.instructions) + [
+        mirrored_instruction(t, tables) for t in train.instructions if cfg.mirrors
+        for _, _, tables in MIRROR_IMAGES])
     mcfg = ModelConfig(n_entities=len(train.entities), vocab_size=len(vocab),
                        embed_dim=train.entities.embed_dim)
     model = build_model(model_name, mcfg)
     target_model = copy.deepcopy(model)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     envs = envs if envs is not None else make_envs(train, cfg)
-    buffer = ReplayBuffer(shape)
+    buffer = ReplayBuffer(shape, cfg.mirrors)
     target_maps: dict[int, np.ndarray] = {}
     episodes, updates, log = 0, 0, []
     start = time.perf_counter()
+    warmup = int(cfg.episodes * cfg.attention_warmup) if getattr(model, "attention", False) else 0
     while episodes < cfg.episodes:
+        # as in supervised training: attention weights start at 0, so until they switch on
+        # t-RNetAttn is exactly t-RNet and the 5-10x cheaper attention-free forward is used
+        if warmup:
+            model.attention_on = target_model.attention_on = episodes >= warmup
         # 1. explore with the current predicted maps
         progress_frac = episodes / max(1, cfg.eps_fraction * cfg.episodes)
         epsilon = cfg.eps_start + min(1.0, progress_frac) * (cfg.eps_end - cfg.eps_start)
@@ -238,7 +282,7 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
     # 3. evaluate the predicted maps of the test split (true maps used only here)
     metrics = world.evaluate_maps(predict(model, vocab, test), test.values, test.rewards, test.terminal)
     summary = {"task": task, "model": model_name, "test": metrics, "episodes": episodes,
-               "transitions": len(buffer.transitions), "maps_seen": len(buffer.grids),
+               "transitions": len(buffer.transitions), "maps_seen": buffer.n_observed,
                "updates": updates, "train_seconds": round(train_seconds, 1),
                "rl_config": asdict(cfg)}
     path = save_checkpoint(Path(out) / f"rl_{task}_{model_name}.pt", model_name, model, mcfg,
@@ -256,7 +300,8 @@ def cmd_rl_train(args) -> int:
                                         ("step_limit", args.step_limit),
                                         ("updates_per_round", args.updates_per_round),
                                         ("target_sync", args.target_sync),
-                                        ("batch_maps", args.batch_maps), ("lr", args.lr))
+                                        ("batch_maps", args.batch_maps), ("lr", args.lr),
+                                        ("mirrors", args.mirrors))
                       if v is not None})
     train = test = None
     if args.task.startswith("generator"):
@@ -292,6 +337,8 @@ def register_cli(sub) -> None:
     p.add_argument("--target-sync", type=int, default=None)
     p.add_argument("--batch-maps", type=int, default=None)
     p.add_argument("--lr", type=float, default=None)
+    p.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
+                   help="also learn from the mirror images of each map (default: on for PuddleWorld)")
     p.add_argument("--generated", type=int, default=500,
                    help="number of generated training examples (generator-* tasks)")
     p.add_argument("--seed", type=int, default=0)

@@ -9,9 +9,11 @@ import torch
 
 from spatial_grounding_ros import cli
 from spatial_grounding_ros.checkpoints import load_checkpoint
+from spatial_grounding_ros.augment import mirror
+from spatial_grounding_ros.env import GridWorldEnv
 from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.rl import RLConfig, ReplayBuffer, act, fitted_value_step, train_rl
-from spatial_grounding_ros.text import Vocabulary
+from spatial_grounding_ros.text import Vocabulary, tokenize
 
 
 class ConstantMap(torch.nn.Module):
@@ -57,6 +59,38 @@ def test_fitted_value_target_uses_own_reward_and_target_max():
     untouched = np.ones((10, 10), bool)
     untouched[0, 1] = untouched[5, 4] = False
     assert np.all(moved[untouched] == 0)
+
+
+def test_mirror_images_record_the_mirrored_worlds_rewards():
+    """Random play on one map fills its three mirror images with exactly the rewards and
+    goal of the mirrored world (augment.mirror), and swaps the instruction's directions."""
+    data = generate(3, seed=4, mode="local")
+    env = GridWorldEnv(data, step_limit=60, order="sequential")
+    buffer = ReplayBuffer((10, 10), mirrors=True)
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        obs, _ = env.reset()
+        i = buffer.map_id(obs["grid"], obs["instruction"])
+        done = False
+        while not done:
+            s = obs["agent"]
+            obs, r, terminated, truncated, _ = env.step(int(rng.integers(4)))
+            buffer.add(i, s, 0, r, obs["agent"], terminated)
+            done = terminated or truncated
+    assert buffer.n_observed == 3 and len(buffer.grids) == 12
+    lr, ud = mirror(data, 2), mirror(data, 1)
+    images = {"lr": lr, "ud": ud, "both": mirror(lr, 1)}
+    for k in range(3):
+        ids = [k * 4 + j for j in range(4)]
+        for i, world_set in zip(ids, [data, images["lr"], images["ud"], images["both"]]):
+            assert np.array_equal(buffer.grids[i], world_set.grids[k])
+            assert buffer.instructions[i] == world_set.instructions[k] or i == ids[0]
+            seen = buffer.visited[i]
+            assert seen.sum() == buffer.visited[ids[0]].sum() > 0
+            assert np.array_equal(buffer.reward[i][seen], world_set.rewards[k][seen])
+            assert np.array_equal(buffer.terminal[i][seen], world_set.terminal[k][seen])
+    if "left" in tokenize(data.instructions[0]):
+        assert "right" in tokenize(buffer.instructions[1])
 
 
 def test_tiny_run_learns_and_writes_a_checkpoint(tmp_path):
