@@ -17,7 +17,7 @@ def cmd_train(args) -> int:
 
     tc = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr, seed=args.seed,
                      threads=args.threads, attention_warmup=args.attention_warmup,
-                     synthetic=args.synthetic, mirrors=args.mirrors)
+                     synthetic=args.synthetic, mirrors=args.mirrors, select=args.select)
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     print(json.dumps({"checkpoint": str(path), **summary}, indent=2))
     return 0
@@ -80,6 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="generated PuddleWorld examples added to training (default: per task)")
     t.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
                    help="add mirrored copies of the training examples (default: per task)")
+    t.add_argument("--select", choices=["pq", "mse"], default="pq",
+                   help="keep the epoch with the best validation PQ (ties: MSE) or the lowest MSE")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--threads", type=int, default=2)
     t.set_defaults(func=cmd_train)
