@@ -12,7 +12,8 @@ from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.augment import mirror
 from spatial_grounding_ros.env import GridWorldEnv
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.rl import RLConfig, ReplayBuffer, act, fitted_value_step, train_rl
+from spatial_grounding_ros.rl import (RLConfig, ReplayBuffer, act, fitted_value_step, reproduce_rl,
+                                        train_rl)
 from spatial_grounding_ros.text import Vocabulary, tokenize
 
 
@@ -114,3 +115,17 @@ def test_rl_train_via_ros(tmp_path, capsys):
     assert summary["episodes"] == 6
     assert 6 <= summary["transitions"] <= 60
     assert (tmp_path / "rl_generator-local_t-cnn.pt").is_file()
+
+
+def test_reproduce_rl_keeps_rows_of_earlier_runs(data_dir, tmp_path):
+    """A run over some tasks replaces its own rows of rl.json and keeps the others."""
+    earlier = {"task": "isi", "model": "t-cnn", "test": {"pq": 0.5, "md": 3.0, "mse": 1.0, "n": 1},
+               "episodes": 1, "train_seconds": 1.0}
+    (tmp_path / "rl.json").write_text(json.dumps({"results": [earlier]}))
+    reproduce_rl(str(data_dir), str(tmp_path), tasks=("pw-local",), models=("t-cnn",),
+                 scale=1e-4, jobs=1, checkpoints=str(tmp_path))
+    rows = json.loads((tmp_path / "rl.json").read_text())["results"]
+    assert [(r["task"], r["model"]) for r in rows] == [("pw-local", "t-cnn"), ("isi", "t-cnn")]
+    assert rows[0]["episodes"] == 1 and rows[0]["test"]["n"] == 399
+    table = (tmp_path / "rl.md").read_text()
+    assert "| pw-local | t-cnn |" in table and "| isi | t-cnn | 0.50 | 0.74 |" in table
