@@ -369,8 +369,8 @@ PAPER_RL = {
     "t-uvfa": {"pw-local": (0.56, 4.71), "pw-global": (0.62, 6.28), "isi": (0.15, 4.61)},
     "t-rnet-attn": {"pw-local": (0.91, 2.10), "pw-global": (0.93, 4.23), "isi": (0.84, 3.79)},
 }
-# Episode budgets per task for `reproduce-rl`, the same for every model, sized for about
-# 45 minutes on 2 cores. t-RNetAttn costs most: ISI's long instructions make its attention
+# Episode budgets per task for `reproduce-rl`, the same for every model, sized for about an
+# hour on 2 cores. t-RNetAttn costs most: ISI's long instructions make its attention
 # phase (the last 15% of episodes) the slowest part.
 RL_EPISODES = {"pw-local": 16_000, "pw-global": 16_000, "isi": 12_000}
 # relative cost per episode, to start the longest runs first
