@@ -45,16 +45,35 @@ SWAP_UP_DOWN = _pairs(
     ("underneeth", "above"), ("topright", "bottomright"), ("topleft", "bottomleft"))
 
 
+# The word table of a flip of an (H, W) map's axis: 0 rows (top-bottom), 1 columns.
+SWAP_TABLES = {0: SWAP_UP_DOWN, 1: SWAP_LEFT_RIGHT}
+# The three mirror images of a map, as the map axes each flips, in with_mirrors' order:
+# left-right, top-bottom, both.
+MIRROR_IMAGES = ((1,), (0,), (1, 0))
+
+
 def swap_words(text: str, table: dict[str, str]) -> str:
     """The instruction's tokens with each direction word replaced by its mirror image."""
     return " ".join(table.get(w, w) for w in tokenize(text))
 
 
+def mirror_instruction(text: str, axes: tuple[int, ...]) -> str:
+    """The instruction of a map flipped over `axes` (map axes, see SWAP_TABLES)."""
+    for axis in axes:
+        text = swap_words(text, SWAP_TABLES[axis])
+    return text
+
+
+def mirror_cell(cell: tuple[int, int], shape: tuple[int, int], axes: tuple[int, ...]) -> tuple[int, int]:
+    """Where `cell` of an (H, W) map lands when the map is flipped over `axes`."""
+    return tuple(n - 1 - c if a in axes else c for a, (c, n) in enumerate(zip(cell, shape)))
+
+
 def mirror(data: GroundingSet, axis: int) -> GroundingSet:
-    """axis 2: left-right (columns), axis 1: top-bottom (rows)."""
+    """axis 2: left-right (columns), axis 1: top-bottom (rows), of the (N, H, W) arrays."""
     if axis not in (1, 2):
         raise ValueError(f"mirror axis must be 1 (rows) or 2 (columns), not {axis}")
-    table = SWAP_LEFT_RIGHT if axis == 2 else SWAP_UP_DOWN
+    table = SWAP_TABLES[axis - 1]
 
     def flip(a: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(np.flip(a, axis=axis))
@@ -68,6 +87,11 @@ def mirror(data: GroundingSet, axis: int) -> GroundingSet:
 
 
 def with_mirrors(data: GroundingSet) -> GroundingSet:
-    """The data set plus its left-right, top-bottom and both-ways mirror images (4x)."""
-    lr = mirror(data, 2)
-    return GroundingSet.concat(data.name, [data, lr, mirror(data, 1), mirror(lr, 1)])
+    """The data set plus its MIRROR_IMAGES: left-right, top-bottom and both ways (4x)."""
+    images = []
+    for axes in MIRROR_IMAGES:
+        image = data
+        for axis in axes:
+            image = mirror(image, axis + 1)  # map axis -> axis of the (N, H, W) arrays
+        images.append(image)
+    return GroundingSet.concat(data.name, [data, *images])

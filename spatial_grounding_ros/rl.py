@@ -34,8 +34,8 @@ import numpy as np
 import torch
 
 from . import world
+from .augment import MIRROR_IMAGES, mirror_cell, mirror_instruction
 from .checkpoints import save_checkpoint
-from .augment import SWAP_LEFT_RIGHT, SWAP_UP_DOWN, swap_words
 from .datasets import TASKS, GroundingSet
 from .env import GridWorldEnv, load_episodes
 from .models import MODELS, ModelConfig, build_model
@@ -67,17 +67,6 @@ class RLConfig:
     threads: int = 1
 
 
-# (flip rows, flip columns, word swap tables) of the three mirror images (augment.py)
-MIRROR_IMAGES = ((False, True, (SWAP_LEFT_RIGHT,)), (True, False, (SWAP_UP_DOWN,)),
-                 (True, True, (SWAP_LEFT_RIGHT, SWAP_UP_DOWN)))
-
-
-def mirrored_instruction(text: str, tables: tuple) -> str:
-    for table in tables:
-        text = swap_words(text, table)
-    return text
-
-
 class ReplayBuffer:
     """Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
     per distinct pair. Because moves are deterministic, the cells entered in a map, with
@@ -91,7 +80,7 @@ class ReplayBuffer:
     def __init__(self, shape: tuple[int, int], mirrors: bool = False):
         self.shape = shape
         self.mirrors = mirrors
-        self.images: dict[int, list[tuple[int, bool, bool]]] = {}  # map id -> its mirror ids
+        self.images: dict[int, list[tuple[int, tuple]]] = {}  # map id -> (mirror id, axes) each
         self.key_to_id: dict[tuple[bytes, str], int] = {}
         self.grids: list[np.ndarray] = []
         self.instructions: list[str] = []
@@ -113,9 +102,8 @@ class ReplayBuffer:
         if key not in self.key_to_id:
             i = self.key_to_id[key] = self._new_map(grid, instruction)
             self.images[i] = [] if not self.mirrors else [
-                (self._new_map(np.flip(grid, axis=tuple(a for a, f in enumerate((rows, cols)) if f)),
-                               mirrored_instruction(instruction, tables)), rows, cols)
-                for rows, cols, tables in MIRROR_IMAGES]
+                (self._new_map(np.flip(grid, axis=axes), mirror_instruction(instruction, axes)), axes)
+                for axes in MIRROR_IMAGES]
         return self.key_to_id[key]
 
     @property
@@ -124,10 +112,10 @@ class ReplayBuffer:
         return len(self.key_to_id)
 
     def add(self, map_id: int, s: tuple, a: int, r: float, s2: tuple, done: bool) -> None:
-        h, w = self.shape
+        w = self.shape[1]
         self.transitions.append((map_id, s[0] * w + s[1], a, r, s2[0] * w + s2[1], done))
-        for i, rows, cols in [(map_id, False, False), *self.images[map_id]]:
-            cell = (h - 1 - s2[0] if rows else s2[0], w - 1 - s2[1] if cols else s2[1])
+        for i, axes in [(map_id, ()), *self.images[map_id]]:
+            cell = mirror_cell(s2, self.shape, axes)
             self.visited[i][cell] = True
             self.reward[i][cell] = r
             self.terminal[i][cell] = done
@@ -240,8 +228,8 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
                       "mirrors": MIRRORS.get(task, True) if cfg.mirrors is None else cfg.mirrors})
     # the mirror images' swapped direction words are trained on too
     vocab = Vocabulary.build(list(train.instructions) + [
-        mirrored_instruction(t, tables) for t in train.instructions if cfg.mirrors
-        for _, _, tables in MIRROR_IMAGES])
+        mirror_instruction(t, axes) for t in train.instructions if cfg.mirrors
+        for axes in MIRROR_IMAGES])
     mcfg = ModelConfig(n_entities=len(train.entities), vocab_size=len(vocab),
                        embed_dim=train.entities.embed_dim)
     model = build_model(model_name, mcfg)
@@ -301,7 +289,8 @@ def cmd_rl_train(args) -> int:
                                         ("updates_per_round", args.updates_per_round),
                                         ("target_sync", args.target_sync),
                                         ("batch_maps", args.batch_maps), ("lr", args.lr),
-                                        ("mirrors", args.mirrors))
+                                        ("mirrors", args.mirrors),
+                                        ("attention_warmup", args.attention_warmup))
                       if v is not None})
     train = test = None
     if args.task.startswith("generator"):
@@ -339,6 +328,8 @@ def register_cli(sub) -> None:
     p.add_argument("--lr", type=float, default=None)
     p.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
                    help="also learn from the mirror images of each map (default: on for PuddleWorld)")
+    p.add_argument("--attention-warmup", type=float, default=None,
+                   help="share of episodes t-RNetAttn runs attention-free (default 0.85; 0: never)")
     p.add_argument("--generated", type=int, default=500,
                    help="number of generated training examples (generator-* tasks)")
     p.add_argument("--seed", type=int, default=0)

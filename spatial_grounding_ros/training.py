@@ -31,7 +31,8 @@ EPOCHS = {"pw-local": 70, "pw-global": 50, "pw": 40, "isi": 25}
 # synthetic phrasing; validation and test stay human): test MD 2.62 -> 2.52 for t-RNet.
 SYNTHETIC = {"pw-local": 2000, "pw-global": 2000, "pw": 2000, "isi": 0}
 # Add the left-right, top-bottom and both-ways mirror images of every training example
-# (augment.py). ISI is off: it has 8x PuddleWorld's examples and a 15-epoch budget already.
+# (augment.py). ISI is off: its instructions use direction words that are not directions
+# ("pick up", "lined up", "right on top of"), which the word tables would wrongly swap.
 MIRRORS = {"pw-local": True, "pw-global": True, "pw": True, "isi": False}
 
 
