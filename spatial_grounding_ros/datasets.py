@@ -193,10 +193,12 @@ def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
 
 def split_by_world(data: GroundingSet, fraction: float, seed: int) -> tuple[GroundingSet, GroundingSet]:
     """Hold out `fraction` of the worlds (every instruction of a world goes to one side), so
-    validation never sees a training map."""
-    names = sorted(set(data.worlds))
+    validation never sees a training map. ISI world ids are `isi-<split>/<sequence>/<step>`
+    and the steps of a sequence share all but one block, so a sequence goes to one side."""
+    groups = [w.rsplit("/", 1)[0] if w.startswith("isi-") else w for w in data.worlds]
+    names = sorted(set(groups))
     rng = np.random.default_rng(seed)
     held = set(rng.choice(names, size=max(1, int(round(len(names) * fraction))), replace=False))
-    mask = np.array([w in held for w in data.worlds])
+    mask = np.array([g in held for g in groups])
     return (data.subset(np.flatnonzero(~mask), data.name + "-train"),
             data.subset(np.flatnonzero(mask), data.name + "-val"))

@@ -46,6 +46,14 @@ def test_isi_dev_split_loads_the_same_way(data_dir, tmp_path):
     assert len(dev) == sum(len(n["notes"]) for n in seq["notes"] if n["type"] == "A0")
 
 
+def test_isi_validation_holds_out_whole_sequences(data_dir):
+    """Steps of one ISI sequence share all but one block: validation must not see any of them."""
+    train, val = datasets.split_by_world(datasets.load_isi(data_dir, "train"), 0.1, seed=0)
+    sequence = lambda w: w.rsplit("/", 1)[0]  # noqa: E731
+    assert len(train) + len(val) == 11871 and len(val) > 500
+    assert not {sequence(w) for w in train.worlds} & {sequence(w) for w in val.worlds}
+
+
 def test_isi_cell_conversion():
     assert datasets.isi_cell(-1.0) == 0
     assert datasets.isi_cell(1.0) == 12
