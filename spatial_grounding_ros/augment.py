@@ -3,8 +3,10 @@ its instruction swapped, is another correct example: the grid MDP is symmetric u
 flips, so the flipped value map is exactly the value map of the flipped world.
 
 Human instructions use many spellings; the tables below cover every direction word that
-occurs at least twice in PuddleWorld train (misspellings map to the right opposite). A word
-the tables miss leaves that mirrored example mislabeled, so the tables err on completeness."""
+occurs at least twice in PuddleWorld or ISI train (misspellings map to the right opposite). A
+word the tables miss leaves that mirrored example mislabeled, so the tables err on
+completeness. Some direction words also have non-directional uses ("pick up", "right next
+to"); NOT_DIRECTIONS keeps those as they are."""
 from __future__ import annotations
 
 import numpy as np
@@ -42,7 +44,23 @@ SWAP_UP_DOWN = _pairs(
     ("northwestern", "southwestern"), ("northeastern", "southeastern"),
     ("northeasternmost", "southeasternmost"), ("northwesternmost", "southwesternmost"),
     ("low", "high"), ("northest", "southernmost"), ("southermost", "northernmost"),
-    ("underneeth", "above"), ("topright", "bottomright"), ("topleft", "bottomleft"))
+    ("underneeth", "above"), ("topright", "bottomright"), ("topleft", "bottomleft"),
+    ("upward", "downward"), ("upwards", "downwards"), ("tops", "bottoms"), ("atop", "below"),
+    ("ontop", "below"), ("blow", "above"), ("belows", "above"))
+
+# Uses of direction words that are not directions, so no flip changes them: the word keeps
+# its spelling after any of the `after` words or before any of the `before` words or word
+# pairs. ISI blocks are "picked up" and "lined up with" other blocks, and go "right next to"
+# them.
+# "right above" stays a direction: "one to the right below the tree" is one (PuddleWorld).
+NOT_DIRECTIONS = {
+    "up": {"after": {"pick", "picks", "picked", "picking", "line", "lines", "lined", "lining",
+                     "match", "matches", "matched", "end", "ends", "ended"}, "before": set()},
+    "right": {"after": set(),
+              "before": {"next", "on top", "beside", "besides", "in", "at", "between", "against",
+                         "behind", "alongside", "atop", "near", "by", "where", "there", "here",
+                         "now", "adjacent", "touching", "directly", "immediately"}},
+}
 
 
 # The word table of a flip of an (H, W) map's axis: 0 rows (top-bottom), 1 columns.
@@ -54,7 +72,17 @@ MIRROR_IMAGES = ((1,), (0,), (1, 0))
 
 def swap_words(text: str, table: dict[str, str]) -> str:
     """The instruction's tokens with each direction word replaced by its mirror image."""
-    return " ".join(table.get(w, w) for w in tokenize(text))
+    words = tokenize(text)
+    out = []
+    for i, word in enumerate(words):
+        keep = NOT_DIRECTIONS.get(word)
+        if keep and ((i > 0 and words[i - 1] in keep["after"])
+                     or " ".join(words[i + 1:i + 2]) in keep["before"]
+                     or " ".join(words[i + 1:i + 3]) in keep["before"]):
+            out.append(word)
+        else:
+            out.append(table.get(word, word))
+    return " ".join(out)
 
 
 def mirror_instruction(text: str, axes: tuple[int, ...]) -> str:

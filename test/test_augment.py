@@ -1,4 +1,6 @@
 """Mirror augmentation: mirrored examples are exactly correct examples."""
+from collections import Counter
+
 import numpy as np
 import pytest
 
@@ -40,17 +42,31 @@ def test_with_mirrors_is_four_times_the_data():
         mirror(data, 0)
 
 
-def test_every_direction_word_in_puddleworld_train_has_a_mirror(data_dir):
+@pytest.mark.parametrize("tasks,min_count", [(("pw-local", "pw-global"), 1), (("isi",), 2)])
+def test_every_direction_word_in_train_has_a_mirror(data_dir, tasks, min_count):
     """A direction word the tables miss would mislabel its mirrored examples."""
-    words = {w for task in ("pw-local", "pw-global")
-             for text in datasets.load_task(task, "train", data_dir).instructions
-             for w in tokenize(text)}
-    horizontal = [w for w in words if any(r in w for r in ("left", "right", "east", "west"))
-                  and w != "lowest"]
-    vertical = [w for w in words if any(r in w for r in
-                                        ("above", "below", "bellow", "north", "south", "top",
-                                         "bottom", "upper", "lower", "under", "beneath", "up",
-                                         "down", "high", "low", "over"))
-                and w not in ("highlighting", "yellow")]
+    counts = Counter(w for task in tasks
+                     for text in datasets.load_task(task, "train", data_dir).instructions
+                     for w in tokenize(text))
+    words = {w for w, n in counts.items() if n >= min_count}
+    # words that only contain a direction's letters; "ups" is ISI's UPS logo block
+    horizontal = [w for w in words - {"lowest", "least"}
+                  if any(r in w for r in ("left", "right", "east", "west"))]
+    vertical = [w for w in words - {"highlighting", "yellow", "stop", "stopping", "ups", "ups's",
+                                    "overlap"}
+                if any(r in w for r in ("above", "below", "bellow", "north", "south", "top",
+                                        "bottom", "upper", "lower", "under", "beneath", "up",
+                                        "down", "high", "low", "over"))]
     assert not [w for w in horizontal if w not in SWAP_LEFT_RIGHT]
     assert not [w for w in vertical if w not in SWAP_UP_DOWN]
+
+
+def test_direction_words_that_are_not_directions_stay():
+    """ISI blocks are picked up, lined up and put right next to one another: no flip moves that."""
+    assert swap_words("Pick up block 3 and put it right next to the right side of block 4",
+                      SWAP_LEFT_RIGHT) == "pick up block 3 and put it right next to the left side of block 4"
+    assert swap_words("move it up until it is lined up with block 2", SWAP_UP_DOWN) == \
+        "move it down until it is lined up with block 2"
+    assert swap_words("put it right on top of block 5", SWAP_LEFT_RIGHT) == "put it right on top of block 5"
+    # "right" before a direction is itself a direction ("one to the right below the tree")
+    assert swap_words("one to the right below the tree", SWAP_LEFT_RIGHT) == "one to the left below the tree"
