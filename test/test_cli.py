@@ -66,10 +66,10 @@ def test_corrupt_and_foreign_checkpoints_are_one_line(tmp_path, data_dir):
 
 
 @pytest.mark.parametrize("name", ["pw-local_t-rnet-attn", "pw-local_t-cnn", "pw-global_t-rnet-attn",
-                                  "pw-global_t-cnn", "pw_t-rnet-attn", "pw_t-cnn"])
+                                  "pw-global_t-cnn", "pw_t-rnet-attn", "pw_t-cnn", "isi_t-cnn"])
 def test_shipped_checkpoint_evaluates_to_its_results_row(name, data_dir, capsys):
-    """The README table is results/value_map.md: each shipped PuddleWorld checkpoint must
-    still give its row (ISI rows are left out: t-RNetAttn on 3177 ISI maps takes 40 s)."""
+    """The README table is results/value_map.md: each shipped checkpoint must still give its
+    row (ISI t-RNetAttn is left out: its 3177 ISI maps take 40 s)."""
     from spatial_grounding_ros import cli
 
     task, model = name.split("_")
