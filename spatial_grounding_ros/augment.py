@@ -49,10 +49,9 @@ SWAP_UP_DOWN = _pairs(
     ("ontop", "below"), ("blow", "above"), ("belows", "above"))
 
 # Uses of direction words that are not directions, so no flip changes them: the word keeps
-# its spelling after any of the `after` words or before any of the `before` words or word
-# pairs. ISI blocks are "picked up" and "lined up with" other blocks, and go "right next to"
-# them.
-# "right above" stays a direction: "one to the right below the tree" is one (PuddleWorld).
+# its spelling after any of its `after` words, or before any of its `before` words or word
+# pairs. ISI blocks are "picked up", "lined up with" others and put "right next to" them.
+# "right above" stays a direction: PuddleWorld's "one to the right below the tree" is one.
 NOT_DIRECTIONS = {
     "up": {"after": {"pick", "picks", "picked", "picking", "line", "lines", "lined", "lining",
                      "match", "matches", "matched", "end", "ends", "ended"}, "before": set()},
