@@ -73,8 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--out", default="out")
     t.add_argument("--epochs", type=int, default=None)
     t.add_argument("--batch-size", type=int, default=64)
-    t.add_argument("--attention-warmup", type=float, default=0.85,
-                   help="share of epochs t-RNetAttn trains with (still uniform) attention off")
+    t.add_argument("--attention-warmup", type=float, default=None,
+                   help="share of epochs t-RNetAttn trains with (still uniform) attention off "
+                        "(default: per task)")
     t.add_argument("--lr", type=float, default=1e-3)
     t.add_argument("--synthetic", type=int, default=None,
                    help="generated PuddleWorld examples added to training (default: per task)")
