@@ -131,6 +131,13 @@ def isi_cell(coord: float) -> int:
     return int(np.clip(np.floor((coord + 1.0) / 2.0 * ISI_GRID), 0, ISI_GRID - 1))
 
 
+def layout_group(world: str) -> str:
+    """The worlds that share a layout: an ISI world id is `isi-<split>/<sequence>/<step>`
+    (load_isi), and the steps of a sequence share all but one block; any other world id is
+    a layout of its own."""
+    return world.rsplit("/", 1)[0] if world.startswith("isi-") else world
+
+
 def load_isi(data_dir: str | Path, split: str) -> GroundingSet:
     """ISI blocks: every instruction of every A0 step of `{split}set.json.gz`."""
     if split not in SPLITS:
@@ -193,9 +200,9 @@ def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
 
 def split_by_world(data: GroundingSet, fraction: float, seed: int) -> tuple[GroundingSet, GroundingSet]:
     """Hold out `fraction` of the worlds (every instruction of a world goes to one side), so
-    validation never sees a training map. ISI world ids are `isi-<split>/<sequence>/<step>`
-    and the steps of a sequence share all but one block, so a sequence goes to one side."""
-    groups = [w.rsplit("/", 1)[0] if w.startswith("isi-") else w for w in data.worlds]
+    validation never sees a training map: worlds that share a layout (an ISI sequence) go
+    to one side together."""
+    groups = [layout_group(w) for w in data.worlds]
     names = sorted(set(groups))
     rng = np.random.default_rng(seed)
     held = set(rng.choice(names, size=max(1, int(round(len(names) * fraction))), replace=False))
