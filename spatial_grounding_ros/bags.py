@@ -195,7 +195,7 @@ class BagEvaluation:
             return out
         md = [abs(e.goal[0] - e.truth[0]) + abs(e.goal[1] - e.truth[1]) for e in self.episodes]
         out["md"] = float(np.mean(md))
-        out["reached"] = float(np.mean([d == 0 for d in md]))
+        out["hit"] = float(np.mean([d == 0 for d in md]))  # the goal_pose is the true goal cell
         full = [e for e in self.episodes if e.values is not None and e.true_values is not None
                 and e.true_rewards is not None and e.values.shape == e.true_values.shape]
         if full and len({e.values.shape for e in full}) == 1:
@@ -291,7 +291,8 @@ def cmd_eval_bag(args) -> int:
         print(f"{args.bag}: no answered instruction with a recorded truth "
               f"({metrics['unanswered']} unanswered)")
     else:
-        line = f"{args.bag}: {metrics['n']} answered instructions, MD {metrics['md']:.2f}"
+        line = (f"{args.bag}: {metrics['n']} answered instructions, MD {metrics['md']:.2f}, "
+                f"HIT {metrics['hit']:.3f}")
         if "pq" in metrics:
             line += f", PQ {metrics['pq']:.3f}, MSE {metrics['mse']:.3f}"
         print(line + f" ({metrics['unanswered']} unanswered)")

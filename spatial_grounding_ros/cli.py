@@ -17,7 +17,8 @@ def cmd_train(args) -> int:
 
     tc = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr, seed=args.seed,
                      threads=args.threads, attention_warmup=args.attention_warmup,
-                     synthetic=args.synthetic, mirrors=args.mirrors, select=args.select)
+                     synthetic=args.synthetic, mirrors=args.mirrors, select=args.select,
+                     world_instructions=args.world_instructions, goal_weight=args.goal_weight)
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     print(json.dumps({"checkpoint": str(path), **summary}, indent=2))
     return 0
@@ -40,7 +41,8 @@ def cmd_eval(args) -> int:
         print(json.dumps(metrics))
     else:
         print(f"{loaded.name} on {args.task} {args.split} (n={metrics['n']}): "
-              f"MSE {metrics['mse']:.3f}  PQ {metrics['pq']:.3f}  MD {metrics['md']:.2f}")
+              f"MSE {metrics['mse']:.3f}  PQ {metrics['pq']:.3f}  MD {metrics['md']:.2f}  "
+              f"HIT {metrics['hit']:.3f}")
     return 0
 
 
@@ -78,11 +80,17 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: per task)")
     t.add_argument("--lr", type=float, default=1e-3)
     t.add_argument("--synthetic", type=int, default=None,
-                   help="generated PuddleWorld examples added to training (default: per task)")
+                   help="generated PuddleWorld examples added to training, all families, "
+                        "mixed sizes (default: per task)")
     t.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
                    help="add mirrored copies of the training examples (default: per task)")
+    t.add_argument("--world-instructions", action=argparse.BooleanOptionalAction, default=None,
+                   help="add the training worlds' synthetic pickle instructions (default: per task)")
+    t.add_argument("--goal-weight", type=float, default=None,
+                   help="weight of the goal-cell cross-entropy beside the MSE (default: per task)")
     t.add_argument("--select", choices=["pq", "mse"], default="pq",
-                   help="keep the epoch with the best validation PQ (ties: MSE) or the lowest MSE")
+                   help="keep the epoch of the second half with the best validation PQ plus "
+                        "generated-validation HIT (ties: MSE), or the lowest MSE")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--threads", type=int, default=2)
     t.set_defaults(func=cmd_train)
@@ -113,9 +121,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _extensions():
     """Subcommands defined next to the code they drive: bench, RL, bags, and the closed-loop
     demo, which needs rclpy (without it, every other subcommand still works)."""
-    from . import bags, bench, rl
+    from . import bags, bench, rl, suite
 
-    found = [bench.register_cli, rl.register_cli, bags.register_cli]
+    found = [bench.register_cli, rl.register_cli, bags.register_cli, suite.register_cli]
     try:
         from .ros import demo
     except ImportError:

@@ -126,6 +126,40 @@ def load_puddleworld(data_dir: str | Path, mode: str, split: str) -> GroundingSe
     return _stack(f"pw-{mode}-{split}", PUDDLEWORLD, rows)
 
 
+def load_world_instructions(data_dir: str | Path, worlds: list[str]) -> GroundingSet:
+    """The synthetic instructions stored in the world pickles (`instructions`, one per goal,
+    Janner et al.'s grammar), for the given PuddleWorld world ids (`pw-local/12`). Only ever
+    pass training worlds: those of test worlds are a held-out benchmark of their own."""
+    root = Path(data_dir) / "puddleworld"
+    rows = []
+    for world_id in sorted(set(worlds), key=lambda w: (w.split("/")[0], int(w.split("/")[1]))):
+        prefix, number = world_id.split("/")
+        mode = prefix.removeprefix("pw-")
+        if mode not in PW_TEST_WORLDS:
+            raise ValueError(f"{world_id}: not a PuddleWorld world id (pw-local/N or pw-global/N)")
+        if int(number) in PW_TEST_WORLDS[mode]:
+            raise ValueError(f"{world_id} is a test world: its instructions are held out")
+        info = _load_pickle(root / mode / f"{number}.p")
+        for g, text in enumerate(info["instructions"]):
+            rows.append((np.asarray(info["map"]), str(text), np.asarray(info["values"][g]),
+                         np.asarray(info["rewards"][g]), np.asarray(info["terminal"][g]).astype(bool),
+                         tuple(int(x) for x in info["goals"][g]), world_id))
+    if not rows:
+        raise ValueError(f"{root}: no world instructions found for {len(worlds)} worlds")
+    return _stack("pw-world-instructions", PUDDLEWORLD, rows)
+
+
+def pw_world_ids(data_dir: str | Path, modes: tuple[str, ...] = ("local", "global"),
+                 split: str = "train") -> list[str]:
+    """Ids (`pw-local/12`) of every PuddleWorld world file of a split, annotated or not."""
+    root = Path(data_dir) / "puddleworld"
+    ids = []
+    for mode in modes:
+        numbers = sorted(int(p.stem) for p in (root / mode).glob("*.p"))
+        ids += [f"pw-{mode}/{n}" for n in numbers if (n in PW_TEST_WORLDS[mode]) == (split == "test")]
+    return ids
+
+
 def isi_cell(coord: float) -> int:
     """A board coordinate in [-1, 1] -> its cell 0..12 on the 13x13 grid (data README)."""
     return int(np.clip(np.floor((coord + 1.0) / 2.0 * ISI_GRID), 0, ISI_GRID - 1))

@@ -46,13 +46,14 @@ def _fmt(x, digits=2):
 
 
 def markdown_table(rows: list[dict]) -> str:
-    lines = ["| task | model | MSE | PQ | MD | paper MSE / PQ / MD | train min |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
+    lines = ["| task | model | MSE | PQ | MD | HIT | paper MSE / PQ / MD | train min |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in rows:
         paper = PAPER.get((r["task"], r["model"]))
         paper_s = " / ".join(_fmt(x) for x in paper) if paper else "-"
         lines.append(f"| {r['task']} | {r['model']} | {r['test']['mse']:.3f} | {r['test']['pq']:.3f} "
-                     f"| {r['test']['md']:.2f} | {paper_s} | {r['train_seconds'] / 60:.1f} |")
+                     f"| {r['test']['md']:.2f} | {_fmt(r['test'].get('hit'), 3)} | {paper_s} "
+                     f"| {r['train_seconds'] / 60:.1f} |")
     return "\n".join(lines) + "\n"
 
 

@@ -40,7 +40,7 @@ from .datasets import TASKS, GroundingSet
 from .env import GridWorldEnv, load_episodes
 from .models import MODELS, ModelConfig, build_model
 from .text import Vocabulary
-from .training import MIRRORS, predict
+from .training import TASK_SETTINGS, predict
 
 RL_TASKS = ("pw-local", "pw-global", "isi")
 
@@ -62,7 +62,7 @@ class RLConfig:
     eps_end: float = 0.1
     eps_fraction: float = 0.5       # ... over this fraction of the episodes
     attention_warmup: float = 0.85  # share of episodes t-RNetAttn runs with (still uniform) attention off
-    mirrors: bool | None = None     # also learn from the mirror images of each map; None: MIRRORS[task]
+    mirrors: bool | None = None     # also learn from the mirror images of each map; None: the task's (training.TASK_SETTINGS)
     seed: int = 0
     threads: int = 1
 
@@ -225,7 +225,7 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
     test = test_data if test_data is not None else load_episodes(task, "test", str(data_dir))
     shape = tuple(train.grids.shape[1:])
     cfg = RLConfig(**{**asdict(cfg), "step_limit": cfg.step_limit or 5 * max(shape),
-                      "mirrors": MIRRORS.get(task, True) if cfg.mirrors is None else cfg.mirrors})
+                      "mirrors": TASK_SETTINGS[task]["mirrors"] if cfg.mirrors is None else cfg.mirrors})
     # the mirror images' swapped direction words are trained on too
     vocab = Vocabulary.build(list(train.instructions) + [
         mirror_instruction(t, axes) for t in train.instructions if cfg.mirrors

@@ -1,7 +1,8 @@
-"""Supervised training (MSE on value maps) and evaluation, readable top to bottom.
+"""Supervised training (value-map MSE plus a goal-cell cross-entropy) and evaluation,
+readable top to bottom.
 
-Adam at the paper's learning rate and batch size; a validation split carved out of train
-(by world) selects the checkpoint; the test split is only ever evaluated.
+Adam at the paper's learning rate; a validation split carved out of train (by world)
+selects the checkpoint; the test split is only ever evaluated.
 """
 from __future__ import annotations
 
@@ -11,32 +12,46 @@ from pathlib import Path
 
 import numpy as np
 import torch
+import torch.nn.functional as F
 from tqdm import tqdm
 
 from . import world
 from .augment import with_mirrors
 from .checkpoints import save_checkpoint
-from .datasets import GroundingSet, load_task, split_by_world
-from .generator import generate
+from .datasets import GroundingSet, load_task, load_world_instructions, pw_world_ids, split_by_world
+from .generator import MODES, generate
 from .models import ModelConfig, build_model
 from .text import Vocabulary
 
 
-# Epoch budgets per task (the validation split picks the best epoch within them), sized so
-# `make reproduce` takes about two hours on 2 cores and t-RNetAttn on PW local under 15 min.
-# PuddleWorld epochs go over the 4x mirrored training set, so 70 of them are 280 passes'
-# worth of optimizer steps. At 15 epochs ISI's validation MSE was still falling.
-EPOCHS = {"pw-local": 70, "pw-global": 50, "pw": 40, "isi": 25}
-# Generated PuddleWorld examples added to each task's training part (our generator's
-# synthetic phrasing; validation and test stay human): test MD 2.62 -> 2.52 for t-RNet.
-SYNTHETIC = {"pw-local": 2000, "pw-global": 2000, "pw": 2000, "isi": 0}
-# Add the left-right, top-bottom and both-ways mirror images of every training example
-# (augment.py). ISI is off because it measured worse: t-RNet's ISI test MSE was 0.178 with
-# `--mirrors --epochs 10` (40 passes) against 0.148 without (25 passes).
-MIRRORS = {"pw-local": True, "pw-global": True, "pw": True, "isi": False}
-# Share of epochs t-RNetAttn trains with (still uniform) attention off: the cheap warm-up
-# that fits PW local in 15 minutes. ISI trains attention from the start, as the paper does.
-ATTENTION_WARMUP = {"pw-local": 0.85, "pw-global": 0.85, "pw": 0.85, "isi": 0.0}
+# Per-task settings, one row per task.
+# epochs: the budget (the validation split picks the best epoch within it). PuddleWorld
+#   epochs go over the 4x mirrored human set plus the generated and world-pickle examples.
+# synthetic: generated worlds added to training (every family of the task's generator
+#   mode, spread over SYNTHETIC_SIZES); validation and test stay human.
+# world_instructions: add the world pickles' synthetic instructions of the training worlds.
+# mirrors: add the left-right, top-bottom and both-ways mirror images of the human examples
+#   (augment.py). ISI is off because it measured worse: t-RNet's ISI test MSE was 0.178
+#   with `--mirrors --epochs 10` (40 passes) against 0.148 without (25 passes).
+# attention_warmup: share of epochs t-RNetAttn trains with (still uniform) attention off,
+#   the cheap phase; ISI trains attention from the start, as the paper does.
+# goal_weight: weight of the goal-cell cross-entropy. ISI keeps 0 until it is measured
+#   there: its rows were trained without it.
+TASK_SETTINGS = {
+    "pw-local":  dict(epochs=70, synthetic=2000, world_instructions=False, mirrors=True,
+                      attention_warmup=0.85, goal_weight=0.0),
+    "pw-global": dict(epochs=50, synthetic=2000, world_instructions=False, mirrors=True,
+                      attention_warmup=0.85, goal_weight=0.0),
+    "pw":        dict(epochs=40, synthetic=2000, world_instructions=False, mirrors=True,
+                      attention_warmup=0.85, goal_weight=0.0),
+    "isi":       dict(epochs=25, synthetic=0, world_instructions=False, mirrors=False,
+                      attention_warmup=0.0, goal_weight=0.0),
+}
+EPOCHS = {task: s["epochs"] for task, s in TASK_SETTINGS.items()}
+# (map size, share of the generated examples): most at Janner's 10x10, some larger so that
+# references that span the map (extremes, gradients) learn how they scale.
+SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
+GENERATOR_MODE = {"pw-local": "local", "pw-global": "global", "pw": "mixed"}
 
 
 @dataclass
@@ -44,16 +59,20 @@ class TrainConfig:
     """Training hyper-parameters. Adam at the paper's lr 1e-3; batch 64, not the paper's 512:
     PW local has ~1400 training maps, so 512 gives 3 steps an epoch, and on a CPU budget
     the number of steps, not the batch, is what limits the fit."""
-    epochs: int | None = None    # None: EPOCHS[task]
+    epochs: int | None = None    # None: the task's (TASK_SETTINGS)
     batch_size: int = 64
     lr: float = 1e-3
     lr_final: float = 1e-4       # cosine decay to this
     val_fraction: float = 0.1    # of the training worlds
     attention_warmup: float | None = None  # share of epochs with attention off; None: per task
-    synthetic: int | None = None  # generated examples added to training; None: SYNTHETIC[task]
-    mirrors: bool | None = None   # add mirrored copies of training examples; None: MIRRORS[task]
+    synthetic: int | None = None  # generated examples added to training; None: the task's
+    world_instructions: bool | None = None  # the training worlds' pickle instructions; None: the task's
+    mirrors: bool | None = None   # add mirrored copies of the human examples; None: the task's
+    goal_weight: float | None = None  # weight of the goal-cell cross-entropy; None: the task's
+    goal_scale: float = 5.0       # values times this are the goal cross-entropy's logits (at start)
+    learn_goal_scale: bool = False  # learn that temperature, so the CE can rank without warping values
     select: str = "pq"           # checkpoint = epoch of the second half with the best validation
-                                 # PQ (ties: MSE), or "mse": the lowest validation MSE
+                                 # PQ plus generated-validation HIT (ties: MSE), or "mse"
     seed: int = 0
     threads: int = 2
 
@@ -96,41 +115,86 @@ def evaluate(model, vocab: Vocabulary, data: GroundingSet) -> dict:
     return world.evaluate_maps(pred, data.values, data.rewards, data.terminal)
 
 
+def evaluate_hit(model, vocab: Vocabulary, data: GroundingSet) -> float:
+    """The exact-goal rate alone (no score iteration): cheap enough for every epoch."""
+    return float(np.mean((world.argmax_cells(predict(model, vocab, data)) == data.goals).all(1)))
+
+
+def training_parts(task: str, train: GroundingSet, val: GroundingSet, tc: TrainConfig,
+                   data_dir: str | Path) -> list[GroundingSet]:
+    """What a task trains on, one GroundingSet per map size: the human examples (with their
+    mirror images), the training worlds' pickle instructions, generated worlds."""
+    human = with_mirrors(train) if tc.mirrors else train
+    parts = [human]
+    if tc.world_instructions:
+        held_out = set(val.worlds)
+        modes = {"pw-local": ("local",), "pw-global": ("global",), "pw": ("local", "global")}[task]
+        parts.append(load_world_instructions(
+            data_dir, [w for w in pw_world_ids(data_dir, modes) if w not in held_out]))
+    if tc.synthetic:
+        if task not in GENERATOR_MODE:
+            raise ValueError(f"--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld")
+        for n, (size, share) in enumerate(SYNTHETIC_SIZES):
+            count = int(round(tc.synthetic * share))
+            if count:
+                parts.append(generate(count, seed=10_000 + 100 * tc.seed + n, mode=GENERATOR_MODE[task],
+                                      size=size))
+    # one set per map size, so that a batch holds maps of one size
+    by_size: dict[tuple, list[GroundingSet]] = {}
+    for part in parts:
+        by_size.setdefault(part.grids.shape[1:], []).append(part)
+    return [GroundingSet.concat(task, group) for group in by_size.values()]
+
+
+def goal_loss(pred: torch.Tensor, goals: torch.Tensor, scale) -> torch.Tensor:
+    """Cross-entropy of the goal cell over the map's cells, the values times `scale` as
+    logits. MSE alone barely penalises a peak one cell off (neighbouring true values differ
+    by 10%), so the argmax often lands beside the goal, or on the object named."""
+    b, h, w = pred.shape
+    return F.cross_entropy(pred.reshape(b, h * w) * scale, goals[:, 0] * w + goals[:, 1])
+
+
+def generated_validation(task: str, seed: int, per_family: int = 40) -> GroundingSet | None:
+    """Fresh generated worlds (never trained on) of every family the task trains on."""
+    if task not in GENERATOR_MODE:
+        return None
+    families = MODES[GENERATOR_MODE[task]]
+    return generate(per_family * len(families), seed=20_000 + seed, mode=GENERATOR_MODE[task])
+
+
 def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str | Path,
                      tc: TrainConfig = TrainConfig(), train_data: GroundingSet | None = None,
                      progress: bool = True, **model_options) -> tuple[Path, dict]:
     """Train `model_name` on `task`, keep the epoch with the best validation score, write
     `out/<task>_<model>.pt`; returns its path and a summary."""
-    tc = TrainConfig(**{**vars(tc), "epochs": tc.epochs or EPOCHS[task],
-                        "synthetic": SYNTHETIC[task] if tc.synthetic is None else tc.synthetic,
-                        "mirrors": MIRRORS[task] if tc.mirrors is None else tc.mirrors,
-                        "attention_warmup": ATTENTION_WARMUP[task] if tc.attention_warmup is None
-                        else tc.attention_warmup})
+    settings = TASK_SETTINGS[task]
+    tc = TrainConfig(**{**vars(tc), **{key: settings[key] for key in settings
+                                       if getattr(tc, key) is None}})
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = train_data if train_data is not None else load_task(task, "train", data_dir)
     train, val = split_by_world(data, tc.val_fraction, tc.seed)
-    if tc.synthetic:
-        if data.entities.domain != "puddleworld":
-            raise ValueError(f"--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld")
-        mode = {"pw-local": "local", "pw-global": "global"}.get(task, "mixed")
-        train = GroundingSet.concat(train.name, [train, generate(tc.synthetic, seed=10_000 + tc.seed,
-                                                                 mode=mode)])
-    if tc.mirrors:
-        train = with_mirrors(train)
+    parts = training_parts(task, train, val, tc, data_dir)
+    val_generated = generated_validation(task, tc.seed) if tc.synthetic else None
     # from everything trained on: generated phrasing and the mirrors' swapped direction words
-    vocab = Vocabulary.build(list(data.instructions) + train.instructions)
+    vocab = Vocabulary.build(list(data.instructions) + [t for p in parts for t in p.instructions])
     cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab),
                       embed_dim=data.entities.embed_dim, **model_options)
     model = build_model(model_name, cfg)
-    opt = torch.optim.Adam(model.parameters(), lr=tc.lr)
-    steps_per_epoch = int(np.ceil(len(train) / tc.batch_size))
+    # log of the goal logits' temperature; learned, it lets the cross-entropy ask for the right
+    # argmax without pulling the values away from the MSE's (it is not part of the model)
+    goal_log_scale = torch.tensor(float(np.log(tc.goal_scale)), requires_grad=tc.learn_goal_scale)
+    opt = torch.optim.Adam([*model.parameters()] + ([goal_log_scale] if tc.learn_goal_scale else []),
+                           lr=tc.lr)
+    encoded = []
+    for part in parts:
+        grids, tokens = encode(vocab, part)
+        encoded.append((grids, tokens, torch.from_numpy(part.values), torch.from_numpy(part.goals),
+                        (tokens != 0).sum(1).numpy()))
+    steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
     warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, "attention", False) else 0
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(
         opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final)
-    grids, tokens = encode(vocab, train)
-    values = torch.from_numpy(train.values)
-    lengths = (tokens != 0).sum(1).numpy()
     rng = np.random.default_rng(tc.seed)
     best = ((float("inf"),), None, -1)
     history = []
@@ -145,34 +209,47 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
                     group["lr"] = tc.lr
                 sched = torch.optim.lr_scheduler.CosineAnnealingLR(
                     opt, T_max=(tc.epochs - warmup) * steps_per_epoch, eta_min=tc.lr_final)
+        plan = [(p, idx) for p, (*_, lengths) in enumerate(encoded)
+                for idx in batches(lengths, tc.batch_size, rng)]
         losses = []
-        for idx in batches(lengths, tc.batch_size, rng):
+        for p in rng.permutation(len(plan)):
+            part, idx = plan[p]
+            grids, tokens, values, goals, _ = encoded[part]
             idx = torch.from_numpy(idx)
-            loss = torch.mean((model(grids[idx], _trim(tokens[idx])) - values[idx]) ** 2)
+            pred = model(grids[idx], _trim(tokens[idx]))
+            loss = torch.mean((pred - values[idx]) ** 2)
+            if tc.goal_weight:
+                loss = loss + tc.goal_weight * goal_loss(pred, goals[idx], goal_log_scale.exp())
             opt.zero_grad()
             loss.backward()
             opt.step()
             sched.step()
             losses.append(loss.item())
         val_metrics = evaluate(model, vocab, val)
-        history.append((float(np.mean(losses)), val_metrics["mse"], val_metrics["pq"]))
-        score = (-val_metrics["pq"], val_metrics["mse"]) if tc.select == "pq" else (val_metrics["mse"],)
+        val_hit = evaluate_hit(model, vocab, val_generated) if val_generated is not None else 0.0
+        history.append((float(np.mean(losses)), val_metrics["mse"], val_metrics["pq"], val_hit))
+        score = ((-(val_metrics["pq"] + val_hit), val_metrics["mse"]) if tc.select == "pq"
+                 else (val_metrics["mse"],))
         # PQ of a few hundred maps swings while the maps are still rough (PW: validation PQ
         # 0.937 at epoch 5 of 40, MSE 0.373), so PQ only chooses among the second half
         if score < best[0] and (tc.select != "pq" or epoch >= tc.epochs // 2):
             best = (score, {k: v.clone() for k, v in model.state_dict().items()}, epoch)
         bar.set_postfix(train=f"{np.mean(losses):.3f}", val_mse=f"{val_metrics['mse']:.3f}",
-                        val_pq=f"{val_metrics['pq']:.3f}", best=best[2])
+                        val_pq=f"{val_metrics['pq']:.3f}", gen_hit=f"{val_hit:.3f}", best=best[2],
+                        scale=f"{goal_log_scale.exp().item():.1f}")
     train_seconds = time.perf_counter() - start
     model.load_state_dict(best[1])
     val_metrics = evaluate(model, vocab, val)
-    summary = {"task": task, "train_examples": len(train), "val_examples": len(val),
+    if val_generated is not None:
+        val_metrics["generated_hit"] = evaluate_hit(model, vocab, val_generated)
+    n_train = sum(len(p) for p in parts)
+    summary = {"task": task, "train_examples": n_train, "val_examples": len(val),
                "best_epoch": best[2], "epochs": tc.epochs, "train_seconds": round(train_seconds, 1),
                "val": val_metrics, "train_config": vars(tc).copy()}
     path = save_checkpoint(Path(out) / f"{task}_{model_name}.pt", model_name, model, cfg, vocab,
                            data.entities, task=task,
-                           training_data=f"{data.name} ({len(train)} train / {len(val)} validation, by world)",
+                           training_data=f"{data.name} ({n_train} train / {len(val)} validation, by world)",
                            seed=tc.seed, best_epoch=best[2], val_metrics=val_metrics,
-                           train_seconds=summary["train_seconds"],
+                           train_seconds=summary["train_seconds"], train_config=vars(tc).copy(),
                            loss_history=[[round(x, 5) for x in row] for row in history])
     return path, summary

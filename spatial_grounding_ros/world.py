@@ -9,7 +9,8 @@ Conventions (shared by every data set and the ROS layer):
 
 The metrics follow Janner et al.'s evaluation code (jannerm/spatial-reasoning,
 pipeline/run_eval.py and score_iteration.py), which the paper's Table 1 compares against:
-MSE over all cells, MD between argmax cells, PQ from score iteration of the softmax policy.
+MSE over all cells, MD between argmax cells, PQ from score iteration of the softmax policy;
+and HIT, the exact-goal rate, which MD averages away.
 Everything here is batched numpy over maps: no Python loop over cells.
 """
 from __future__ import annotations
@@ -144,11 +145,14 @@ def policy_quality(pred: np.ndarray, true: np.ndarray, rewards: np.ndarray,
 
 def evaluate_maps(pred: np.ndarray, true: np.ndarray, rewards: np.ndarray,
                   terminal: np.ndarray) -> dict:
-    """The paper's value-map metrics over a set of maps (all (B, H, W))."""
+    """The paper's value-map metrics over a set of maps (all (B, H, W)), and HIT: the share
+    of maps whose predicted argmax is the goal cell (the true map's unique maximum)."""
     pred, true = np.asarray(pred, np.float64), np.asarray(true, np.float64)
+    distances = manhattan_distances(pred, true)
     return {
         "mse": mse(pred, true),
         "pq": float(np.mean(policy_quality(pred, true, rewards, terminal))),
-        "md": float(np.mean(manhattan_distances(pred, true))),
+        "md": float(np.mean(distances)),
+        "hit": float(np.mean(distances == 0)),
         "n": int(len(pred)),
     }

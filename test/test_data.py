@@ -1,11 +1,11 @@
-"""Data sets: the paper's split counts, ISI conversion, vocabulary, generator."""
+"""Data sets: the paper's split counts, ISI conversion, vocabulary, the world pickles' instructions."""
 import gzip
 import json
 
 import numpy as np
 import pytest
 
-from spatial_grounding_ros import datasets, generator, world
+from spatial_grounding_ros import datasets, world
 from spatial_grounding_ros.text import UNK, Vocabulary, tokenize
 
 
@@ -83,30 +83,6 @@ def test_vocabulary_reserves_pad_and_unknown():
     ids = vocab.encode_batch(["reach the zebra", "tree"])
     assert ids.shape == (2, 3)
     assert ids[0, 2] == UNK and ids[1, 1] == 0
-
-
-def test_generator_makes_consistent_examples():
-    data = generator.generate(60, seed=3, mode="mixed")
-    assert len(data) == 60
-    np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
-    for grid, text, goal in zip(data.grids, data.instructions, data.goals):
-        if text.startswith("reach cell with "):
-            assert generator.PUDDLEWORLD.names[grid[tuple(goal)]] == text.split()[-1]
-    again = generator.generate(60, seed=3, mode="mixed")
-    assert again.instructions == data.instructions
-
-
-def test_generator_directions_follow_row0_is_north():
-    grid = np.zeros((10, 10), dtype=np.int64)
-    grid[5, 5] = generator.PUDDLEWORLD.index("star")
-    goals = dict(generator.local_goals(grid))
-    assert goals["reach cell on top of star"] == (4, 5)
-    assert goals["reach cell two to the right of star"] == (5, 7)
-    assert goals["reach cell one to the left and two below star"] == (7, 4)
-    grid[2, 1] = grid[8, 3] = generator.PUDDLEWORLD.index("rock")
-    goals = dict(generator.global_goals(grid))
-    assert goals["reach northernmost rock"] == (2, 1)
-    assert goals["reach easternmost rock"] == (8, 3)
 
 
 @pytest.mark.parametrize("task,floor", [("pw-local", 0.675), ("pw-global", 0.750), ("isi", 0.002)])
