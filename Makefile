@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 DATA ?= ../shared/data
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test reproduce reproduce-rl bench clean
+.PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl bench clean
 
 setup: $(STAMP)
 
@@ -24,6 +24,16 @@ test: $(STAMP)
 
 reproduce: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce --data $(DATA) --out results
+
+# The reference suite on the shipped PuddleWorld checkpoints (make reproduce runs it too):
+# results/suite.json, results/suite.md
+reproduce-suite: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce --suite-only --out results
+
+# Each change of the clear-references recipe off in turn (about 25 minutes on 2 cores):
+# results/ablation.json, results/ablation.md
+reproduce-ablation: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce --ablation --data $(DATA) --out results
 
 # RL rows of the paper's table (about an hour on 2 cores): results/rl.json, results/rl.md
 reproduce-rl: $(STAMP)

@@ -47,8 +47,14 @@ def cmd_eval(args) -> int:
 
 
 def cmd_reproduce(args) -> int:
-    from .reproduce import reproduce_value_maps
+    from .reproduce import reproduce_ablation, reproduce_suite, reproduce_value_maps
 
+    if args.ablation:
+        reproduce_ablation(args.data, args.out, threads=args.threads)
+        return 0
+    if args.suite_only:
+        reproduce_suite(args.out)
+        return 0
     reproduce_value_maps(args.data, args.out, args.epochs_scale, args.tasks, args.models,
                          args.threads)
     return 0
@@ -111,6 +117,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--epochs-scale", type=float, default=1.0,
                    help="multiply every epoch budget (e.g. 0.1 for a quick check)")
     r.add_argument("--threads", type=int, default=2, help="torch threads per training run")
+    r.add_argument("--suite-only", action="store_true",
+                   help="only run the reference suite on the shipped checkpoints (results/suite.*)")
+    r.add_argument("--ablation", action="store_true",
+                   help="only the clear-references ablation: t-RNet on pw, each change of the "
+                        "recipe off in turn (results/ablation.*, about 25 minutes)")
     r.set_defaults(func=cmd_reproduce)
 
     for register in _extensions():

@@ -45,6 +45,10 @@ class ModelConfig:
     head: tuple = (8, 16, 32, 16, 8)  # output network: 3x3 conv channels before the last conv
     radius: int = 1               # relation neighbourhood (1: the paper's 8 neighbours)
     head_slope: float = 0.01      # negative slope of the head's ReLUs (0: plain ReLU)
+    gradient_cells: float = 0.0   # G1, G2 rise by 1 every this many cells (0: span -1..1 whatever the size)
+
+    # fields added after checkpoints were shipped, with the value those checkpoints had
+    LATER_FIELDS = {"gradient_cells": 0.0}
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -53,6 +57,7 @@ class ModelConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> "ModelConfig":
+        d = {**cls.LATER_FIELDS, **d}
         missing = [f.name for f in fields(cls) if f.name not in d]
         if missing:
             raise ValueError(f"model config lacks {', '.join(missing)}")
@@ -110,10 +115,20 @@ def neighbour_index(height: int, width: int, radius: int = 1,
     return centre, centre[:, None] + offsets[None, :]
 
 
-def gradient_maps(height: int, width: int, device=None) -> torch.Tensor:
-    """(3, H, W): G1 horizontal (west -1 .. east +1), G2 vertical (north -1 .. south +1), J ones."""
-    g1 = torch.linspace(-1, 1, width, device=device).expand(height, width)
-    g2 = torch.linspace(-1, 1, height, device=device)[:, None].expand(height, width)
+def gradient_maps(height: int, width: int, device=None, cells: float = 0.0) -> torch.Tensor:
+    """(3, H, W): G1 horizontal (west to east), G2 vertical (north to south), J ones.
+
+    cells = 0: G1 and G2 span -1..1 whatever the map size (the paper's). cells > 0: they are
+    0 at the centre and rise by 1 every `cells` cells, so one row further south is worth the
+    same on any map; cells = 4.5 equals the paper's on 10x10 maps. With the span fixed, a
+    row is worth 0.065 on 32x32 against 0.22 on 10x10, and "southernmost" picked a rock one
+    or two rows short."""
+    def ramp(n):
+        if cells:
+            return (torch.arange(n, dtype=torch.float32, device=device) - (n - 1) / 2) / cells
+        return torch.linspace(-1, 1, n, device=device)
+    g1 = ramp(width).expand(height, width)
+    g2 = ramp(height)[:, None].expand(height, width)
     return torch.stack([g1, g2, torch.ones(height, width, device=device)])
 
 
@@ -128,8 +143,9 @@ class OutputHead(nn.Module):
     PQ 0.881 -> 0.906, at +3 ms on a 128x128 map. No final ReLU: true values go negative (puddles,
     down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes."""
 
-    def __init__(self, channels: tuple = (), slope: float = 0.0):
+    def __init__(self, channels: tuple = (), slope: float = 0.0, gradient_cells: float = 0.0):
         super().__init__()
+        self.gradient_cells = gradient_cells
         sizes = [2, *channels, 1]
         self.convs = nn.ModuleList(nn.Conv2d(a, b, kernel_size=3, padding=1)
                                    for a, b in zip(sizes[:-1], sizes[1:]))
@@ -139,7 +155,7 @@ class OutputHead(nn.Module):
 
     def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
         b, h, w = z1.shape
-        z2 = torch.einsum("bc,chw->bhw", beta, gradient_maps(h, w, z1.device))
+        z2 = torch.einsum("bc,chw->bhw", beta, gradient_maps(h, w, z1.device, self.gradient_cells))
         x = torch.stack([z1, z2], dim=1)
         for n, conv in enumerate(self.convs):
             x = conv(x)
@@ -166,7 +182,7 @@ class TRNet(nn.Module):
             self.attn = nn.Linear(cfg.hidden, 2 * cfg.embed_dim, bias=False)
             nn.init.zeros_(self.attn.weight)
         self.attention_on = attention  # training may switch it off while attn is still 0
-        self.head = OutputHead(cfg.head, cfg.head_slope)
+        self.head = OutputHead(cfg.head, cfg.head_slope, cfg.gradient_cells)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
 
@@ -244,7 +260,7 @@ class TCNN(nn.Module):
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)
         self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + 3)  # 66 for k = 7
-        self.head = OutputHead(cfg.head, cfg.head_slope)
+        self.head = OutputHead(cfg.head, cfg.head_slope, cfg.gradient_cells)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b, h, w = grids.shape

@@ -1,6 +1,7 @@
 """`make reproduce`: train every model on every task, evaluate on the test splits, write
-`results/value_map.json` and `results/value_map.md` (the README table), and ship the
-t-RNetAttn and t-CNN checkpoints in the package."""
+`results/value_map.json` and `results/value_map.md` (the README table), ship the
+t-RNetAttn and t-CNN checkpoints in the package, and run the reference suite on the shipped
+PuddleWorld checkpoints (`results/suite.json`, `results/suite.md`)."""
 from __future__ import annotations
 
 import fcntl
@@ -27,6 +28,9 @@ PAPER = {
     ("isi", "t-rnet-attn"): (0.15, None, 3.43),
 }
 SHIPPED = ("t-rnet-attn", "t-cnn")
+# The suite table's columns: the node's default first, then the per-task checkpoints.
+SUITE_CHECKPOINTS = ("pw_t-rnet-attn", "pw_t-cnn", "pw-local_t-rnet-attn", "pw-local_t-cnn",
+                     "pw-global_t-rnet-attn", "pw-global_t-cnn")
 
 
 def forward_latency(model, grids, tokens, repeats: int = 50) -> float:
@@ -84,7 +88,22 @@ def reproduce_value_maps(data_dir: str, out: str, epochs_scale: float = 1.0,
             print(f"{task} {model_name}: test {row['test']}", flush=True)
             merge_results(results_path, row)
             rows.append(row)
+    if any(task.startswith("pw") for task in tasks):
+        reproduce_suite(out)
     return rows
+
+
+def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int = 0) -> dict:
+    """The reference suite on every shipped PuddleWorld checkpoint: results/suite.{json,md}."""
+    from . import suite
+
+    results = {name: suite.run_suite(name, sizes, n, seed, progress=True) for name in SUITE_CHECKPOINTS}
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    meta = {"command": "make reproduce-suite", "sizes": list(sizes), "n_per_family": n, "seed": seed}
+    (out / "suite.json").write_text(json.dumps({"meta": meta, "runs": results}, indent=1) + "\n")
+    (out / "suite.md").write_text(suite.markdown_table(results))
+    return results
 
 
 def merge_results(results_path: Path, row: dict) -> None:
@@ -102,3 +121,49 @@ def merge_results(results_path: Path, row: dict) -> None:
                 "torch": torch.__version__}
         results_path.write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
         results_path.with_suffix(".md").write_text(markdown_table(rows))
+
+
+# Each change of the clear-references recipe, turned off one at a time from the full recipe
+# (same seed, same epochs): (name, TrainConfig overrides, ModelConfig overrides).
+ABLATIONS = (
+    ("recipe", {}, {}),
+    ("MSE only (no goal cross-entropy)", {"goal_weight": 0.0}, {}),
+    ("fixed goal temperature 5", {"learn_goal_scale": False}, {}),
+    ("gradient maps span -1..1", {}, {"gradient_cells": 0.0}),
+    ("no world-pickle instructions", {"world_instructions": False}, {}),
+    ("no generated worlds", {"synthetic": 0}, {}),
+)
+
+
+def reproduce_ablation(data_dir: str, out: str, model: str = "t-rnet", epochs: int = 8,
+                       synthetic: int = 16000, threads: int = 2, seed: int = 0) -> list[dict]:
+    """Train `model` on pw once per ABLATIONS row and score each on the suite (10x10 and
+    32x32) and the human test splits: results/ablation.json and results/ablation.md."""
+    from . import suite
+
+    rows = []
+    for name, train_overrides, model_overrides in ABLATIONS:
+        tc = TrainConfig(**{"epochs": epochs, "synthetic": synthetic, "threads": threads, "seed": seed,
+                            **train_overrides})
+        path, summary = train_supervised("pw", model, data_dir, Path(out) / "ablation" / name.split()[0],
+                                         tc, **model_overrides)
+        loaded = load_checkpoint(path)
+        row = {"variant": name, "train_seconds": summary["train_seconds"],
+               "suite": suite.run_suite(path, (10, 32), 40, seed, progress=False)}
+        for task in ("pw-local", "pw-global"):
+            row[task] = evaluate(loaded.model, loaded.vocab, load_task(task, "test", data_dir))
+        print(f"{name}: suite {row['suite']['sizes']}, local {row['pw-local']}", flush=True)
+        rows.append(row)
+    meta = {"command": f"spatial-grounding reproduce --ablation (pw, {model}, {epochs} epochs, "
+                       f"{synthetic} generated, seed {seed})"}
+    Path(out).mkdir(parents=True, exist_ok=True)
+    (Path(out) / "ablation.json").write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
+    lines = ["| variant | suite hit 10x10 | suite hit 32x32 | PW local MD / HIT / MSE / PQ "
+             "| PW global MD / HIT / MSE / PQ |", "| --- | --- | --- | --- | --- |"]
+    for r in rows:
+        human = [f"{r[t]['md']:.2f} / {r[t]['hit']:.3f} / {r[t]['mse']:.3f} / {r[t]['pq']:.3f}"
+                 for t in ("pw-local", "pw-global")]
+        lines.append(f"| {r['variant']} | {r['suite']['sizes']['10']['hit']:.1%} "
+                     f"| {r['suite']['sizes']['32']['hit']:.1%} | {human[0]} | {human[1]} |")
+    (Path(out) / "ablation.md").write_text("\n".join(lines) + "\n")
+    return rows

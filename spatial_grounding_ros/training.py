@@ -35,17 +35,18 @@ from .text import Vocabulary
 #   with `--mirrors --epochs 10` (40 passes) against 0.148 without (25 passes).
 # attention_warmup: share of epochs t-RNetAttn trains with (still uniform) attention off,
 #   the cheap phase; ISI trains attention from the start, as the paper does.
-# goal_weight: weight of the goal-cell cross-entropy. ISI keeps 0 until it is measured
-#   there: its rows were trained without it.
+# goal_weight: weight of the goal-cell cross-entropy (every model, baselines included).
+#   ISI keeps 0 until it is measured there: its rows were trained without it.
+# model: ModelConfig fields for this task's models. PuddleWorld's gradient maps rise by 1
+#   every 4.5 cells: exactly the paper's on 10x10, and the same per cell on larger maps.
+_PW = dict(synthetic=32000, world_instructions=True, mirrors=True, attention_warmup=0.85,
+           goal_weight=1.0, model={"gradient_cells": 4.5})
 TASK_SETTINGS = {
-    "pw-local":  dict(epochs=70, synthetic=2000, world_instructions=False, mirrors=True,
-                      attention_warmup=0.85, goal_weight=0.0),
-    "pw-global": dict(epochs=50, synthetic=2000, world_instructions=False, mirrors=True,
-                      attention_warmup=0.85, goal_weight=0.0),
-    "pw":        dict(epochs=40, synthetic=2000, world_instructions=False, mirrors=True,
-                      attention_warmup=0.85, goal_weight=0.0),
+    "pw-local":  dict(_PW, epochs=40),
+    "pw-global": dict(_PW, epochs=40),
+    "pw":        dict(_PW, epochs=40),
     "isi":       dict(epochs=25, synthetic=0, world_instructions=False, mirrors=False,
-                      attention_warmup=0.0, goal_weight=0.0),
+                      attention_warmup=0.0, goal_weight=0.0, model={}),
 }
 EPOCHS = {task: s["epochs"] for task, s in TASK_SETTINGS.items()}
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
@@ -70,7 +71,7 @@ class TrainConfig:
     mirrors: bool | None = None   # add mirrored copies of the human examples; None: the task's
     goal_weight: float | None = None  # weight of the goal-cell cross-entropy; None: the task's
     goal_scale: float = 5.0       # values times this are the goal cross-entropy's logits (at start)
-    learn_goal_scale: bool = False  # learn that temperature, so the CE can rank without warping values
+    learn_goal_scale: bool = True  # learn that temperature, so the CE can rank without warping values
     select: str = "pq"           # checkpoint = epoch of the second half with the best validation
                                  # PQ plus generated-validation HIT (ties: MSE), or "mse"
     seed: int = 0
@@ -168,8 +169,9 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
     """Train `model_name` on `task`, keep the epoch with the best validation score, write
     `out/<task>_<model>.pt`; returns its path and a summary."""
     settings = TASK_SETTINGS[task]
-    tc = TrainConfig(**{**vars(tc), **{key: settings[key] for key in settings
-                                       if getattr(tc, key) is None}})
+    tc = TrainConfig(**{**vars(tc), **{key: value for key, value in settings.items()
+                                       if key != "model" and getattr(tc, key) is None}})
+    model_options = {**settings["model"], **model_options}
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = train_data if train_data is not None else load_task(task, "train", data_dir)
@@ -250,6 +252,7 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
                            data.entities, task=task,
                            training_data=f"{data.name} ({n_train} train / {len(val)} validation, by world)",
                            seed=tc.seed, best_epoch=best[2], val_metrics=val_metrics,
+                           goal_scale=round(float(goal_log_scale.exp()), 3),
                            train_seconds=summary["train_seconds"], train_config=vars(tc).copy(),
                            loss_history=[[round(x, 5) for x in row] for row in history])
     return path, summary

@@ -34,7 +34,8 @@ def test_eval_prints_exactly_one_json_object(data_dir):
 def test_train_is_deterministic_with_seed(data_dir, tmp_path):
     for out in ("a", "b"):
         r = run("train", "--task", "pw-local", "--model", "t-cnn", "--epochs", "2", "--seed", "3",
-                "--data", str(data_dir), "--out", str(tmp_path / out), "--threads", "1")
+                "--synthetic", "300", "--data", str(data_dir), "--out", str(tmp_path / out),
+                "--threads", "1")
         assert r.returncode == 0, r.stderr
     a = torch.load(tmp_path / "a" / "pw-local_t-cnn.pt", weights_only=True)
     b = torch.load(tmp_path / "b" / "pw-local_t-cnn.pt", weights_only=True)
