@@ -3,7 +3,6 @@ test maps with the goal that `spatial-grounding eval` predicts for them (the arg
 same model's value map, computed through the training code's batched predict)."""
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +10,7 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 
-from grounder_helpers import interrupt, make_probe  # noqa: E402
+from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
 
 from spatial_grounding_ros import world  # noqa: E402
 from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
@@ -20,7 +19,7 @@ from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.training import predict  # noqa: E402
 
-NAMESPACE = "/console_test"
+NAMESPACE = unique_namespace("console_test")
 
 
 def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_context):
@@ -38,8 +37,10 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
         assert graph.wait_for(lambda: probe.connected() or process.poll() is not None, timeout=45)
         assert process.poll() is None, process.stdout.read()
         for grid, text, cell in zip(test.grids, test.instructions, expected):
-            probe.publish_map(grid)
-            time.sleep(0.3)  # the map and the instruction travel on different topics
+            # the map and the instruction travel on different topics: send the instruction
+            # once the node says (OK diagnostic with the map's stamp) that it holds this map
+            message = probe.publish_map(grid)
+            assert graph.wait_for(lambda: probe.holds(message), timeout=15), text
             before = probe.counts()
             probe.publish_instruction(text)
             assert graph.wait_for(lambda: probe.new("goals", before), timeout=15), text

@@ -9,7 +9,7 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 
-from grounder_helpers import make_probe, random_checkpoint  # noqa: E402
+from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
@@ -19,7 +19,7 @@ from spatial_grounding_ros.grounder import Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 
-NAMESPACE = "/grounder_node_test"
+NAMESPACE = unique_namespace("grounder_node_test")
 MAX_CELLS = 400
 MAX_CHARS = 80
 NO_GOAL_WAIT = 0.3  # after the diagnostic, how long a stray goal would have had to arrive
@@ -51,11 +51,13 @@ def nodes(ros_module_context, checkpoint):
     return graph, grounder, probe
 
 
-def wait_held(graph, grounder, message) -> None:
-    """Until the grounder holds `message` as its map (topics are not ordered among each
-    other, so an instruction sent right after a map could otherwise overtake it)."""
-    assert graph.wait_for(lambda: grounder.map_msg is not None
-                          and grounder.map_msg.header.stamp.sec == message.header.stamp.sec)
+def wait_held(nodes, message) -> None:
+    """Until the grounder says it holds `message` as its map (its OK entity_map diagnostic
+    with that stamp): topics are not ordered among each other, so an instruction sent right
+    after a map could otherwise overtake it. The node's own state agrees."""
+    graph, grounder, probe = nodes
+    assert graph.wait_for(lambda: probe.holds(message)), "no OK diagnostic for the map"
+    assert grounder.map_msg.header.stamp == message.header.stamp
 
 
 def raw_values(msg) -> np.ndarray:
@@ -67,7 +69,7 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id="map", gr
     graph, grounder, probe = nodes
     grid = WORLDS.grids[world] if grid is None else grid
     text = WORLDS.instructions[world]
-    wait_held(graph, grounder, probe.publish_map(grid, info, frame_id))
+    wait_held(nodes, probe.publish_map(grid, info, frame_id))
     before = probe.counts()
     probe.publish_instruction(text)
     outputs = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics")
@@ -194,7 +196,7 @@ def test_reground_on_map_change(nodes, reference):
     good_request(nodes, reference, world=0)
     before = probe.counts()
     # off (the default): a new map waits for the next instruction
-    wait_held(graph, grounder, probe.publish_map(WORLDS.grids[3]))
+    wait_held(nodes, probe.publish_map(WORLDS.grids[3]))
     time.sleep(NO_GOAL_WAIT)
     assert not probe.new("goals", before)
     grounder.set_parameters([Parameter("reground_on_map_change", value=True)])
