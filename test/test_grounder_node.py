@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 import pytest
+import torch
 
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 
@@ -209,3 +210,94 @@ def test_reground_on_map_change(nodes, reference):
             convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2])
     finally:
         grounder.set_parameters([Parameter("reground_on_map_change", value=False)])
+
+
+def test_a_rejected_instruction_drops_the_held_one(nodes, reference):
+    """README: "a rejected instruction drops the held instruction". With
+    reground_on_map_change, a held instruction is grounded again on each new map; after a
+    rejected instruction the next map gets no goal. Likewise an instruction waiting for a
+    map is dropped by a rejected one and never grounded."""
+    graph, grounder, probe = nodes
+    good_request(nodes, reference, world=0)
+    grounder.set_parameters([Parameter("reground_on_map_change", value=True)])
+    try:
+        before = probe.counts()
+        probe.publish_map(WORLDS.grids[1])  # the control: the held instruction is re-grounded
+        assert graph.wait_for(lambda: probe.new("goals", before) and any(
+            s.name.endswith(": grounding") for s in probe.new("diagnostics", before))), \
+            "held instruction not re-grounded"
+        before = probe.counts()
+        probe.publish_instruction("xyzzy plugh frobozz")
+        expect_rejected(nodes, before, "no word of the instruction")
+        before = probe.counts()
+        wait_held(nodes, probe.publish_map(WORLDS.grids[2]))
+        time.sleep(NO_GOAL_WAIT)
+        assert not probe.new("goals", before), "a rejected instruction left the old one held"
+    finally:
+        grounder.set_parameters([Parameter("reground_on_map_change", value=False)])
+    # waiting for a map: held (WARN "holding"), then dropped by a rejected one
+    before = probe.counts()
+    probe.publish_map(message=bad_map(resolution=0.0))
+    expect_rejected(nodes, before, "resolution 0.0")
+    before = probe.counts()
+    probe.publish_instruction(WORLDS.instructions[1])
+    expect_rejected(nodes, before, "holding instruction")
+    before = probe.counts()
+    probe.publish_instruction(" ")
+    expect_rejected(nodes, before, "instruction is empty")
+    before = probe.counts()
+    wait_held(nodes, probe.publish_map(WORLDS.grids[1]))
+    time.sleep(NO_GOAL_WAIT)
+    assert not probe.new("goals", before), "the dropped instruction was grounded"
+    good_request(nodes, reference, world=3)
+
+
+def test_empty_frame_id_takes_default_frame_id(nodes, reference):
+    """README: `default_frame_id` (default `map`) is the outputs' frame when the entity map's
+    frame_id is empty; a non-empty frame is passed through (good_request's "odom")."""
+    graph, grounder, probe = nodes
+    assert grounder.get_parameter("default_frame_id").value == "map"
+    try:
+        for default in ("map", "robot1/map"):
+            grounder.set_parameters([Parameter("default_frame_id", value=default)])
+            wait_held(nodes, probe.publish_map(WORLDS.grids[0], frame_id=""))
+            before = probe.counts()
+            probe.publish_instruction(WORLDS.instructions[0])
+            outputs = ("goals", "value_maps", "relation_maps")
+            assert graph.wait_for(lambda: all(probe.new(k, before) for k in outputs))
+            for k in outputs:
+                assert probe.new(k, before)[-1].header.frame_id == default, (k, default)
+    finally:
+        grounder.set_parameters([Parameter("default_frame_id", value="map")])
+
+
+class FailingModel(torch.nn.Module):
+    """A model whose forward raises as torch does when a map needs more memory than there
+    is (a real 256x256 request with a long instruction can; this one does it on demand)."""
+
+    def forward(self, grids, tokens, return_aux=False):
+        raise RuntimeError("DefaultCPUAllocator: not enough memory: you tried to allocate "
+                           "412316860416 bytes.")
+
+
+def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes, reference):
+    """README: "ERROR if the model fails": an exception in the model's forward is an ERROR
+    diagnostic and an error log line naming it, no goal, and the next request is answered."""
+    graph, grounder, probe = nodes
+    wait_held(nodes, probe.publish_map(WORLDS.grids[0]))
+    model = grounder.grounder.model
+    grounder.grounder.model = FailingModel()
+    try:
+        before = probe.counts()
+        probe.publish_instruction(WORLDS.instructions[0])
+        assert graph.wait_for(lambda: probe.new("diagnostics", before))
+        [status] = probe.new("diagnostics", before)
+        assert status.level == DiagnosticStatus.ERROR and status.name.endswith(": grounding")
+        assert "failed: RuntimeError: DefaultCPUAllocator: not enough memory" in status.message
+        assert graph.wait_for(lambda: any("DefaultCPUAllocator" in w
+                                          for w in probe.new("warnings", before)))
+        time.sleep(NO_GOAL_WAIT)
+        assert not probe.new("goals", before)
+    finally:
+        grounder.grounder.model = model
+    good_request(nodes, reference, world=1)
