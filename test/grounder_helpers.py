@@ -3,6 +3,8 @@ node that talks to the grounder over DDS and keeps everything it hears."""
 from __future__ import annotations
 
 import itertools
+import os
+import secrets
 import signal
 import subprocess
 from pathlib import Path
@@ -17,6 +19,14 @@ from spatial_grounding_ros.models import ModelConfig, build_model
 from spatial_grounding_ros.text import Vocabulary
 
 MODEL = "t-rnet-attn"
+
+
+def unique_namespace(base: str) -> str:
+    """`/<base>_<pid>_<random>`: a namespace of this run's own. The ROS_DOMAIN_ID of a run is
+    one of 100, so two runs on one host can share a domain; in their own namespaces they
+    cannot hear each other's maps, instructions or goals (or diagnostics, which the probe
+    filters by the node's full name)."""
+    return f"/{base}_{os.getpid()}_{secrets.token_hex(3)}"
 
 
 def generator_vocabulary() -> Vocabulary:
@@ -52,7 +62,7 @@ def north_east_checkpoint(path: Path) -> Path:
 def make_probe(context, namespace: str, grounder_name: str):
     """A node that publishes entity maps and instructions into `namespace` and records the
     grounder's outputs, its diagnostics and its /rosout lines."""
-    from diagnostic_msgs.msg import DiagnosticArray
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import OccupancyGrid
     from rcl_interfaces.msg import Log
@@ -61,6 +71,8 @@ def make_probe(context, namespace: str, grounder_name: str):
 
     from spatial_grounding_ros.ros import convert
     from spatial_grounding_ros.ros.grounder_node import LATCHED
+
+    logger_name = grounder_name.strip("/").replace("/", ".")  # how /rosout names its lines
 
     class GrounderProbe(Node):
         RECORDS = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics",
@@ -89,11 +101,21 @@ def make_probe(context, namespace: str, grounder_name: str):
             return getattr(self, record)[counts[record]:]
 
         def on_diagnostics(self, msg):
-            self.diagnostics += [s for s in msg.status if s.name.startswith(grounder_name)]
+            self.diagnostics += [s for s in msg.status if s.name.startswith(grounder_name + ":")]
 
         def on_log(self, msg):
-            if msg.name.endswith("spatial_grounder") and msg.level >= Log.WARN:
+            # /rosout is global: keep the lines of this namespace's grounder only
+            if msg.name == logger_name and msg.level >= Log.WARN:
                 self.warnings.append(msg.msg)
+
+        def holds(self, message) -> bool:
+            """Whether the grounder said (its OK `entity_map` diagnostic) that it holds the map
+            `message`, told apart from earlier maps by its stamp."""
+            stamp = {"stamp_sec": str(message.header.stamp.sec),
+                     "stamp_nanosec": str(message.header.stamp.nanosec)}
+            return any(s.name == f"{grounder_name}: entity_map" and s.level == DiagnosticStatus.OK
+                       and stamp.items() <= {v.key: v.value for v in s.values}.items()
+                       for s in self.diagnostics)
 
         def connected(self) -> bool:
             return (self.instruction_pub.get_subscription_count() > 0

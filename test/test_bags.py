@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+import reference
 from spatial_grounding_ros import cli, world
 from spatial_grounding_ros.bags import BagWriter, evaluate_bag, typestore
 
@@ -47,34 +48,50 @@ def multiarray(values):
     return T["std_msgs/msg/Float32MultiArray"](layout=layout, data=values.reshape(-1))
 
 
-def write_bag(path, episodes, with_values=False, skip=()):
+def write_bag(path, episodes, with_values=False, skip=(), puddles=None, noise=0.0,
+              names=None, other_goals=None):
     """episodes: (instruction, answered cell, true cell); gridworld order: truth, then
-    instruction, then goal (and value map)."""
-    grid = np.zeros((10, 10), np.int64)
+    instruction, then goal (and value map). The predicted map is the true map of the answered
+    cell, plus `noise` times a seeded normal; `names` renames topics (role -> topic);
+    `other_goals` (topic -> one cell per episode) adds a second answerer's goals.
+    With values, returns the path and the float32 maps written: (predicted, true values,
+    true rewards) per answered episode."""
+    puddles = np.zeros((10, 10), bool) if puddles is None else puddles
+    grid = puddles.astype(np.int64)  # entity 1 = puddle
+    topic = {"map": "/entity_map", "truth": "/true_goal", "true_values": "/true_value_map",
+             "true_rewards": "/true_reward_map", "instruction": "/instruction",
+             "goal": "/goal_pose", "values": "/value_map_raw", **(names or {})}
+    rng = np.random.default_rng(0)
+    written = []
     t = 1
     with BagWriter(path) as bag:
         if "map" not in skip:
-            bag.write_message("/entity_map", "nav_msgs/msg/OccupancyGrid", t, occupancy(grid))
-        for text, answer, truth in episodes:
-            rewards, terminal = world.reward_map(np.zeros((10, 10), bool), truth)
+            bag.write_message(topic["map"], "nav_msgs/msg/OccupancyGrid", t, occupancy(grid))
+        for n, (text, answer, truth) in enumerate(episodes):
+            rewards, terminal = world.reward_map(puddles, truth)
             values = world.value_iteration(rewards, terminal)
             t += 10
-            bag.write_message("/true_goal", "geometry_msgs/msg/PoseStamped", t, pose_at(truth))
+            bag.write_message(topic["truth"], "geometry_msgs/msg/PoseStamped", t, pose_at(truth))
             if with_values:
-                bag.write_message("/true_value_map", "std_msgs/msg/Float32MultiArray", t + 1,
+                bag.write_message(topic["true_values"], "std_msgs/msg/Float32MultiArray", t + 1,
                                   multiarray(values))
-                bag.write_message("/true_reward_map", "std_msgs/msg/Float32MultiArray", t + 1,
+                bag.write_message(topic["true_rewards"], "std_msgs/msg/Float32MultiArray", t + 1,
                                   multiarray(rewards))
-            bag.write_message("/instruction", "std_msgs/msg/String", t + 2,
+            bag.write_message(topic["instruction"], "std_msgs/msg/String", t + 2,
                               T["std_msgs/msg/String"](data=text))
             if answer is not None:
-                bag.write_message("/goal_pose", "geometry_msgs/msg/PoseStamped", t + 3,
+                bag.write_message(topic["goal"], "geometry_msgs/msg/PoseStamped", t + 3,
                                   pose_at(answer))
+                for other, cells in (other_goals or {}).items():
+                    bag.write_message(other, "geometry_msgs/msg/PoseStamped", t + 3,
+                                      pose_at(cells[n]))
                 if with_values:
-                    r2, t2 = world.reward_map(np.zeros((10, 10), bool), answer)
-                    bag.write_message("/value_map_raw", "std_msgs/msg/Float32MultiArray", t + 4,
-                                      multiarray(world.value_iteration(r2, t2)))
-    return path
+                    r2, t2 = world.reward_map(puddles, answer)
+                    pred = world.value_iteration(r2, t2) + noise * rng.normal(size=(10, 10))
+                    bag.write_message(topic["values"], "std_msgs/msg/Float32MultiArray", t + 4,
+                                      multiarray(pred))
+                    written.append(tuple(np.float32(m) for m in (pred, values, rewards)))
+    return (path, written) if with_values else path
 
 
 def test_md_from_a_standard_types_bag(tmp_path, capsys):
@@ -90,15 +107,48 @@ def test_md_from_a_standard_types_bag(tmp_path, capsys):
 
 
 def test_pq_and_mse_when_value_maps_are_recorded(tmp_path):
-    bag = write_bag(tmp_path / "bag", [("a", (1, 1), (1, 1)), ("b", (5, 5), (5, 6))],
-                    with_values=True)
+    """MSE and PQ of eval-bag equal numpy's MSE and test/reference.py's cell-by-cell PQ of
+    the very float32 maps written into the bag (a map with puddles, noisy predictions, one
+    answer off by a cell). The truth's cell is the terminal one."""
+    puddles = np.zeros((10, 10), bool)
+    puddles[4:7, 2] = puddles[0, 5:8] = True
+    episodes = [("a", (1, 1), (1, 1)), ("b", (5, 5), (5, 6)), ("c", (8, 8), (0, 6))]
+    bag, written = write_bag(tmp_path / "bag", episodes, with_values=True, puddles=puddles,
+                             noise=0.3)
+    pred, true, rewards = (np.stack(m).astype(np.float64) for m in zip(*written))
     m = evaluate_bag(bag).metrics()
-    assert m["n"] == 2 and m["n_value_maps"] == 2
-    assert m["md"] == pytest.approx(0.5)
-    assert 0.0 < m["pq"] < 1.0 and m["mse"] > 0  # the second answer is one cell off
-    perfect = evaluate_bag(write_bag(tmp_path / "bag2", [("a", (2, 2), (2, 2))],
-                                     with_values=True)).metrics()
+    assert m["n"] == 3 and m["n_value_maps"] == 3
+    assert m["md"] == pytest.approx((0 + 1 + 10) / 3)
+    assert m["mse"] == pytest.approx(np.mean((pred - true) ** 2), rel=1e-12)
+    terminal = np.zeros(true.shape, bool)
+    for t, (_, _, truth) in zip(terminal, episodes):
+        t[truth] = True
+    pq = [reference.policy_quality(*maps) for maps in zip(pred, true, rewards, terminal)]
+    # eval-bag takes the softmax of the float32 maps in float32: agreement to about 1e-8
+    assert m["pq"] == pytest.approx(np.mean(pq), abs=1e-6)
+    assert pq[0] > pq[2]  # the right answer (noisy) above the one 10 cells off
+    perfect, _ = write_bag(tmp_path / "bag2", [("a", (2, 2), (2, 2))], with_values=True)
+    perfect = evaluate_bag(perfect).metrics()
     assert perfect["pq"] == pytest.approx(1.0) and perfect["mse"] == pytest.approx(0.0)
+
+
+def test_eval_bag_topic_options_pick_the_topics(tmp_path, capsys):
+    """`eval-bag --goal-topic` etc.: a bag with two robots' goals side by side is an error
+    naming both without the option (never a silent pick), and each robot's own MD with it;
+    a truth recorded under another name is found by its relative name."""
+    bag = write_bag(tmp_path / "bag", [("a", (1, 1), (1, 1)), ("b", (5, 5), (5, 8))],
+                    names={"goal": "/robot1/goal_pose", "truth": "/robot1/expected_goal"},
+                    other_goals={"/robot2/goal_pose": [(1, 4), (9, 8)]})
+    assert cli.main(["eval-bag", str(bag), "--truth-topic", "expected_goal"]) == 2
+    err = capsys.readouterr().err
+    assert "/robot1/goal_pose, /robot2/goal_pose" in err and "--goal-topic" in err
+    for robot, md in (("robot1", (0 + 3) / 2), ("robot2", (3 + 4) / 2)):
+        assert cli.main(["eval-bag", str(bag), "--json", "--goal-topic", f"/{robot}/goal_pose",
+                         "--truth-topic", "expected_goal"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        assert out["topics"]["goal"] == f"/{robot}/goal_pose"
+        assert out["topics"]["truth"] == "/robot1/expected_goal"
+        assert out["n"] == 2 and out["md"] == pytest.approx(md), robot
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):

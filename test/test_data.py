@@ -27,12 +27,30 @@ def test_train_and_test_worlds_are_disjoint(data_dir):
 
 @pytest.mark.parametrize("split,count", [("train", 11871), ("test", 3177)])
 def test_isi_counts_and_grid(data_dir, split, count):
+    """Counts, grid, and every value map: the reward map is the ISI conversion (+3 terminal
+    at the goal, -1 on every block but the moved one, which leaves its cell), and the value
+    map is what test/reference.py's value iteration makes of it, cell for cell."""
+    import reference
+
     data = datasets.load_isi(data_dir, split)
     assert len(data) == count
     assert data.grids.shape[1:] == (13, 13)
     assert data.grids.max() <= 40 and len(data.entities) == 41
-    # the goal is the true map's best cell, and value iteration made the maps
+    # the goal is the true map's best cell
     np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
+    # one map per board step (its instructions share it)
+    _, first = np.unique(data.worlds, return_index=True)
+    grids, rewards, terminal, values, goals = (x[first] for x in (
+        data.grids, data.rewards, data.terminal, data.values, data.goals))
+    n = np.arange(len(first))
+    assert (terminal.sum(axis=(1, 2)) == 1).all() and terminal[n, goals[:, 0], goals[:, 1]].all()
+    assert (rewards[terminal] == 3).all()
+    obstacles = rewards == -1
+    blocks = grids > 0
+    assert set(np.unique(rewards[~terminal])) <= {0.0, -1.0}
+    assert not (obstacles & ~blocks).any()                       # only blocks are obstacles
+    assert ((blocks & ~obstacles).sum(axis=(1, 2)) == 1).all()    # all but the moved one
+    np.testing.assert_allclose(values, reference.value_iteration(rewards, terminal), atol=1e-5)
 
 
 def test_isi_dev_split_loads_the_same_way(data_dir, tmp_path):

@@ -1,15 +1,11 @@
 """The RL environment: rewards and termination come from the example's maps, moves from
 world.step_cell, and the true values never reach the observation."""
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from spatial_grounding_ros import world
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
-
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 
 
 @pytest.fixture(scope="module")
@@ -98,9 +94,14 @@ def test_sequential_order_and_generator_source():
     assert seen == [0, 1, 2, 0]
 
 
-@pytest.mark.skipif(not (DATA / "puddleworld").is_dir(), reason="../shared/data is absent")
-def test_puddleworld_episodes():
-    data = load_episodes("pw-local", "test", str(DATA))
+def test_puddleworld_episodes(data_dir):
+    """Episodes of a data set split (read from SPATIAL_GROUNDING_DATA or ../shared/data, the
+    data_dir fixture): the example's own map, instruction and rewards."""
+    data = load_episodes("pw-local", "test", str(data_dir))
+    assert len(data) == 399
     env = GridWorldEnv(data)
     obs, info = env.reset(seed=0)
-    assert obs["instruction"] == data.instructions[info["example"]]
+    i = info["example"]
+    assert obs["instruction"] == data.instructions[i] and np.array_equal(obs["grid"], data.grids[i])
+    _, reward, _, _, _ = env.step(3)
+    assert reward == data.rewards[i][env.agent]

@@ -1,6 +1,8 @@
 """The gridworld node over real DDS: it publishes an episode (map in the OccupancyGrid
 orientation, instruction, truth), moves on actions, walks to a goal_pose, and answers bad
 input with a warning diagnostic while it keeps serving. Plus the closed-loop demo."""
+import os
+import secrets
 import time
 
 import numpy as np
@@ -40,9 +42,13 @@ def ros():
     rclpy.shutdown(context=context)
 
 
+# a namespace of this run's own: runs that share a ROS_DOMAIN_ID (one of 100) never meet
+NAMESPACE = f"/gw_test_{os.getpid()}_{secrets.token_hex(3)}"
+
+
 class Probe(rclpy.node.Node):
     def __init__(self, context):
-        super().__init__("probe", namespace="/gw_test", context=context)
+        super().__init__("probe", namespace=NAMESPACE, context=context)
         self.got = {k: [] for k in ("map", "instruction", "pose", "reward", "terminated",
                                     "goal", "values", "diag")}
         sub = self.create_subscription
@@ -53,11 +59,16 @@ class Probe(rclpy.node.Node):
         sub(PoseStamped, "agent_pose", self.got["pose"].append, STEPS)
         sub(Float32, "reward", self.got["reward"].append, STEPS)
         sub(Bool, "terminated", self.got["terminated"].append, STEPS)
-        sub(DiagnosticArray, "/diagnostics", self.got["diag"].append, 10)
+        sub(DiagnosticArray, "/diagnostics", self.on_diagnostics, 10)
         self.action = self.create_publisher(Int32, "action", STEPS)
         self.goal = self.create_publisher(PoseStamped, "goal_pose", 10)
         self.next = self.create_client(Trigger, "next_episode")
         self.reset = self.create_client(Trigger, "reset_episode")
+
+    def on_diagnostics(self, msg):
+        # /diagnostics is global: keep this namespace's gridworld only
+        if msg.status and msg.status[0].name.startswith(f"{NAMESPACE}/gridworld:"):
+            self.got["diag"].append(msg)
 
 
 def spin_until(executor, cond, timeout=10.0):
@@ -72,7 +83,7 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
     params = [Parameter("source", value="generator-local"), Parameter("episodes", value=3),
               Parameter("seed", value=5), Parameter("step_period", value=0.01),
               Parameter("resolution", value=0.5), Parameter("origin_x", value=2.0)]
-    gw = make(GridWorldNode, namespace="/gw_test", parameter_overrides=params)
+    gw = make(GridWorldNode, namespace=NAMESPACE, parameter_overrides=params)
     probe = make(Probe)
     got = probe.got
     spin_until(executor, lambda: got["map"] and got["instruction"] and got["goal"]

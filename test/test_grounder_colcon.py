@@ -14,7 +14,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 ament_packages = pytest.importorskip("ament_index_python.packages")
 
-from grounder_helpers import interrupt, make_probe, random_checkpoint  # noqa: E402
+from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
 
 from spatial_grounding_ros.checkpoints import load_checkpoint, resolve_checkpoint  # noqa: E402
 from spatial_grounding_ros.generator import generate  # noqa: E402
@@ -24,7 +24,7 @@ from spatial_grounding_ros.ros import convert  # noqa: E402
 PACKAGE = "spatial_grounding_ros"
 REPO = Path(__file__).resolve().parents[1]
 COLCON = Path(sys.executable).parent / "colcon"
-NAMESPACE = "/colcon_test"
+NAMESPACE = unique_namespace("colcon_test")
 # what a source checkout holds besides the package: never part of a build
 NOT_SOURCE = (".venv", ".git", "build", "install", "log", "results", "out", "demo_out",
               "__pycache__", "*.egg-info", ".pytest_cache")
@@ -66,31 +66,38 @@ def test_ament_index_finds_executables_and_share_files(install_prefix, ament_env
         assert (share / name).is_file(), name
 
 
-def test_launch_file_describes_the_grounder(install_prefix, ament_env):
+def test_installed_launch_file_is_the_checked_one(install_prefix, ament_env):
+    """The launch file colcon installs is the source file whose arguments, node and
+    parameters test_ros_config checks (that part needs no ROS launch)."""
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
-    source = (share / "launch" / "grounder.launch.py").read_text()
-    compile(source, "grounder.launch.py", "exec")  # syntax, even where launch is absent
-    for part in ('executable="grounder"', 'name="spatial_grounder"', '"grounder.yaml"'):
-        assert part in source
+    installed = (share / "launch" / "grounder.launch.py").read_text()
+    assert installed == (REPO / "launch" / "grounder.launch.py").read_text()
+    compile(installed, "grounder.launch.py", "exec")
+
+
+def test_launch_description_builds_with_ros_launch(install_prefix, ament_env):
+    """What only ROS launch can show: the installed file builds a description holding the
+    grounder Node. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and
+    runs on a ROS 2 system (colcon test)."""
     # launch.actions, not launch: this repository's launch/ folder imports as `launch`
-    pytest.importorskip("launch.actions", reason="ROS launch is not installed (not on PyPI)")
-    pytest.importorskip("launch_ros.actions", reason="launch_ros is not installed")
+    pytest.importorskip("launch.actions", reason="ROS launch is not installed (not on PyPI); "
+                        "test_ros_config checks the file's arguments, node and parameters")
+    pytest.importorskip("launch_ros.actions", reason="launch_ros is not installed (not on PyPI)")
+    share = Path(ament_packages.get_package_share_directory(PACKAGE))
     namespace = {}
-    exec(source, namespace)
+    exec((share / "launch" / "grounder.launch.py").read_text(), namespace)
     description = namespace["generate_launch_description"]()
     assert any(type(e).__name__ == "Node" for e in description.entities)
 
 
 def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env,
-                                                        ros_context, tmp_path):
+                                                        ros_context):
     exe = Path(ament_packages.get_package_prefix(PACKAGE)) / "lib" / PACKAGE / "grounder"
     args = ["--ros-args", "-r", f"__ns:={NAMESPACE}"]
-    try:  # the packaged defaults when there is a checkpoint; else a test checkpoint
-        checkpoint = resolve_checkpoint(DEFAULT_CHECKPOINT)
-        load_checkpoint(checkpoint)
-    except (FileNotFoundError, ValueError):
-        checkpoint = random_checkpoint(tmp_path / "random.pt")
-        args += ["-p", f"checkpoint:={checkpoint}"]
+    # the packaged defaults, packaged checkpoint included: a checkpoint that cannot load fails
+    # here (and the node would exit with an error), never falls back to another model
+    checkpoint = resolve_checkpoint(DEFAULT_CHECKPOINT)
+    load_checkpoint(checkpoint)
     process = subprocess.Popen([str(exe), *args], env=ament_env, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)
     try:
@@ -104,7 +111,8 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
 
         world = generate(1, seed=5, mode="global")
         grid, text = world.grids[0], world.instructions[0]
-        probe.publish_map(grid)
+        message = probe.publish_map(grid)
+        assert graph.wait_for(lambda: probe.holds(message), timeout=15)
         before = probe.counts()
         probe.publish_instruction(text)
         assert graph.wait_for(lambda: probe.new("goals", before), timeout=15)
@@ -115,6 +123,9 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
     finally:
         returncode, output = interrupt(process)
     assert returncode == 0, output
-    # its config came from the colcon install, not from this source tree
+    # its config came from the colcon install, not from this source tree, and its model is
+    # the packaged default of the install
     share = ament_packages.get_package_share_directory(PACKAGE)
     assert f"entity table {share}/config/entities_puddleworld.yaml" in output, output
+    assert f"model {load_checkpoint(checkpoint).name} from {install_prefix}" in output, output
+    assert f"/{checkpoint.name}, entity table" in output, output

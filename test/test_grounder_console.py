@@ -1,9 +1,9 @@
 """The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
 test maps with the goal that `spatial-grounding eval` predicts for them (the argmax of the
-same model's value map, computed through the training code's batched predict)."""
+same model's value map, computed through the training code's batched predict); bad start-up
+input is one error line and exit status 1."""
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +11,7 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 
-from grounder_helpers import interrupt, make_probe  # noqa: E402
+from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
 
 from spatial_grounding_ros import world  # noqa: E402
 from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
@@ -20,7 +20,7 @@ from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.training import predict  # noqa: E402
 
-NAMESPACE = "/console_test"
+NAMESPACE = unique_namespace("console_test")
 
 
 def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_context):
@@ -38,8 +38,10 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
         assert graph.wait_for(lambda: probe.connected() or process.poll() is not None, timeout=45)
         assert process.poll() is None, process.stdout.read()
         for grid, text, cell in zip(test.grids, test.instructions, expected):
-            probe.publish_map(grid)
-            time.sleep(0.3)  # the map and the instruction travel on different topics
+            # the map and the instruction travel on different topics: send the instruction
+            # once the node says (OK diagnostic with the map's stamp) that it holds this map
+            message = probe.publish_map(grid)
+            assert graph.wait_for(lambda: probe.holds(message), timeout=15), text
             before = probe.counts()
             probe.publish_instruction(text)
             assert graph.wait_for(lambda: probe.new("goals", before), timeout=15), text
@@ -49,3 +51,28 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
     finally:
         returncode, output = interrupt(process)
     assert returncode == 0, output
+
+
+def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
+    """README: a bad checkpoint or entity table stops the node at start-up with one line
+    `grounder: error: ...` and exit status 1 (no traceback), naming the problem."""
+    exe = Path(sys.executable).parent / "grounder"
+    if not exe.is_file():
+        pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
+    corrupt = tmp_path / "corrupt.pt"
+    corrupt.write_bytes(b"\x00 not a checkpoint")
+    cases = {  # parameter -> what the line must say
+        f"checkpoint:={tmp_path / 'missing.pt'}": "missing.pt: checkpoint not found",
+        f"checkpoint:={corrupt}": "corrupt.pt: not a readable checkpoint",
+        "entity_table:=entities_isi.yaml": "is not the one checkpoint pw_t-rnet-attn was trained on",
+        "entity_table:=no_such_table.yaml": "no_such_table.yaml: config file not found",
+    }
+    namespace = unique_namespace("start_up_test")
+    processes = {p: subprocess.Popen([str(exe), "--ros-args", "-r", f"__ns:={namespace}",
+                                      "-p", p], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True) for p in cases}
+    for parameter, needle in cases.items():
+        out, err = processes[parameter].communicate(timeout=120)
+        assert processes[parameter].returncode == 1, (parameter, err)
+        assert err.splitlines() == [err.strip()] and err.startswith("grounder: error: "), err
+        assert needle in err, (parameter, err)

@@ -6,10 +6,11 @@ import time
 
 import numpy as np
 import pytest
+import torch
 
 pytest.importorskip("rclpy", reason="rclpy is not installed")
 
-from grounder_helpers import make_probe, random_checkpoint  # noqa: E402
+from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
@@ -19,7 +20,7 @@ from spatial_grounding_ros.grounder import Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 
-NAMESPACE = "/grounder_node_test"
+NAMESPACE = unique_namespace("grounder_node_test")
 MAX_CELLS = 400
 MAX_CHARS = 80
 NO_GOAL_WAIT = 0.3  # after the diagnostic, how long a stray goal would have had to arrive
@@ -51,11 +52,13 @@ def nodes(ros_module_context, checkpoint):
     return graph, grounder, probe
 
 
-def wait_held(graph, grounder, message) -> None:
-    """Until the grounder holds `message` as its map (topics are not ordered among each
-    other, so an instruction sent right after a map could otherwise overtake it)."""
-    assert graph.wait_for(lambda: grounder.map_msg is not None
-                          and grounder.map_msg.header.stamp.sec == message.header.stamp.sec)
+def wait_held(nodes, message) -> None:
+    """Until the grounder says it holds `message` as its map (its OK entity_map diagnostic
+    with that stamp): topics are not ordered among each other, so an instruction sent right
+    after a map could otherwise overtake it. The node's own state agrees."""
+    graph, grounder, probe = nodes
+    assert graph.wait_for(lambda: probe.holds(message)), "no OK diagnostic for the map"
+    assert grounder.map_msg.header.stamp == message.header.stamp
 
 
 def raw_values(msg) -> np.ndarray:
@@ -67,7 +70,7 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id="map", gr
     graph, grounder, probe = nodes
     grid = WORLDS.grids[world] if grid is None else grid
     text = WORLDS.instructions[world]
-    wait_held(graph, grounder, probe.publish_map(grid, info, frame_id))
+    wait_held(nodes, probe.publish_map(grid, info, frame_id))
     before = probe.counts()
     probe.publish_instruction(text)
     outputs = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics")
@@ -194,7 +197,7 @@ def test_reground_on_map_change(nodes, reference):
     good_request(nodes, reference, world=0)
     before = probe.counts()
     # off (the default): a new map waits for the next instruction
-    wait_held(graph, grounder, probe.publish_map(WORLDS.grids[3]))
+    wait_held(nodes, probe.publish_map(WORLDS.grids[3]))
     time.sleep(NO_GOAL_WAIT)
     assert not probe.new("goals", before)
     grounder.set_parameters([Parameter("reground_on_map_change", value=True)])
@@ -207,3 +210,94 @@ def test_reground_on_map_change(nodes, reference):
             convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2])
     finally:
         grounder.set_parameters([Parameter("reground_on_map_change", value=False)])
+
+
+def test_a_rejected_instruction_drops_the_held_one(nodes, reference):
+    """README: "a rejected instruction drops the held instruction". With
+    reground_on_map_change, a held instruction is grounded again on each new map; after a
+    rejected instruction the next map gets no goal. Likewise an instruction waiting for a
+    map is dropped by a rejected one and never grounded."""
+    graph, grounder, probe = nodes
+    good_request(nodes, reference, world=0)
+    grounder.set_parameters([Parameter("reground_on_map_change", value=True)])
+    try:
+        before = probe.counts()
+        probe.publish_map(WORLDS.grids[1])  # the control: the held instruction is re-grounded
+        assert graph.wait_for(lambda: probe.new("goals", before) and any(
+            s.name.endswith(": grounding") for s in probe.new("diagnostics", before))), \
+            "held instruction not re-grounded"
+        before = probe.counts()
+        probe.publish_instruction("xyzzy plugh frobozz")
+        expect_rejected(nodes, before, "no word of the instruction")
+        before = probe.counts()
+        wait_held(nodes, probe.publish_map(WORLDS.grids[2]))
+        time.sleep(NO_GOAL_WAIT)
+        assert not probe.new("goals", before), "a rejected instruction left the old one held"
+    finally:
+        grounder.set_parameters([Parameter("reground_on_map_change", value=False)])
+    # waiting for a map: held (WARN "holding"), then dropped by a rejected one
+    before = probe.counts()
+    probe.publish_map(message=bad_map(resolution=0.0))
+    expect_rejected(nodes, before, "resolution 0.0")
+    before = probe.counts()
+    probe.publish_instruction(WORLDS.instructions[1])
+    expect_rejected(nodes, before, "holding instruction")
+    before = probe.counts()
+    probe.publish_instruction(" ")
+    expect_rejected(nodes, before, "instruction is empty")
+    before = probe.counts()
+    wait_held(nodes, probe.publish_map(WORLDS.grids[1]))
+    time.sleep(NO_GOAL_WAIT)
+    assert not probe.new("goals", before), "the dropped instruction was grounded"
+    good_request(nodes, reference, world=3)
+
+
+def test_empty_frame_id_takes_default_frame_id(nodes, reference):
+    """README: `default_frame_id` (default `map`) is the outputs' frame when the entity map's
+    frame_id is empty; a non-empty frame is passed through (good_request's "odom")."""
+    graph, grounder, probe = nodes
+    assert grounder.get_parameter("default_frame_id").value == "map"
+    try:
+        for default in ("map", "robot1/map"):
+            grounder.set_parameters([Parameter("default_frame_id", value=default)])
+            wait_held(nodes, probe.publish_map(WORLDS.grids[0], frame_id=""))
+            before = probe.counts()
+            probe.publish_instruction(WORLDS.instructions[0])
+            outputs = ("goals", "value_maps", "relation_maps")
+            assert graph.wait_for(lambda: all(probe.new(k, before) for k in outputs))
+            for k in outputs:
+                assert probe.new(k, before)[-1].header.frame_id == default, (k, default)
+    finally:
+        grounder.set_parameters([Parameter("default_frame_id", value="map")])
+
+
+class FailingModel(torch.nn.Module):
+    """A model whose forward raises as torch does when a map needs more memory than there
+    is (a real 256x256 request with a long instruction can; this one does it on demand)."""
+
+    def forward(self, grids, tokens, return_aux=False):
+        raise RuntimeError("DefaultCPUAllocator: not enough memory: you tried to allocate "
+                           "412316860416 bytes.")
+
+
+def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes, reference):
+    """README: "ERROR if the model fails": an exception in the model's forward is an ERROR
+    diagnostic and an error log line naming it, no goal, and the next request is answered."""
+    graph, grounder, probe = nodes
+    wait_held(nodes, probe.publish_map(WORLDS.grids[0]))
+    model = grounder.grounder.model
+    grounder.grounder.model = FailingModel()
+    try:
+        before = probe.counts()
+        probe.publish_instruction(WORLDS.instructions[0])
+        assert graph.wait_for(lambda: probe.new("diagnostics", before))
+        [status] = probe.new("diagnostics", before)
+        assert status.level == DiagnosticStatus.ERROR and status.name.endswith(": grounding")
+        assert "failed: RuntimeError: DefaultCPUAllocator: not enough memory" in status.message
+        assert graph.wait_for(lambda: any("DefaultCPUAllocator" in w
+                                          for w in probe.new("warnings", before)))
+        time.sleep(NO_GOAL_WAIT)
+        assert not probe.new("goals", before)
+    finally:
+        grounder.grounder.model = model
+    good_request(nodes, reference, world=1)

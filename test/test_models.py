@@ -5,7 +5,8 @@ import torch
 from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
 from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
-from spatial_grounding_ros.models import MODELS, ModelConfig, TRNet, build_model, relation_param_count
+from spatial_grounding_ros.models import (MODELS, ModelConfig, TRNet, build_model, neighbour_index,
+                                          relation_param_count, relative_positions)
 from spatial_grounding_ros.text import Vocabulary
 
 
@@ -117,3 +118,62 @@ def test_no_python_loop_over_cells_cost_is_flat_in_batch():
             stack += [f for f, _ in fn.next_functions]
         counts.append(len(seen))
     assert counts[0] == counts[1]
+
+
+def test_t_rnet_attn_at_zero_attention_is_t_rnet():
+    """README: the attention projection starts at zero, which makes t-RNetAttn exactly t-RNet
+    (uniform attention over the words, and the decoder is linear): so the warm-up may run
+    the attention-free forward. Same weights, same maps, padding included; and any non-zero
+    attention changes the answer (so the comparison can fail)."""
+    data, vocab, grids, tokens = _batch(n=6)
+    cfg = ModelConfig(vocab_size=len(vocab))
+    torch.manual_seed(0)
+    attn = build_model("t-rnet-attn", cfg).eval()
+    assert attn.attn.weight.abs().max() == 0  # as built
+    rnet = build_model("t-rnet", cfg).eval()
+    rnet.load_state_dict({k: v for k, v in attn.state_dict().items() if not k.startswith("attn.")})
+    with torch.no_grad():
+        expected, expected_aux = rnet(grids, tokens, return_aux=True)
+        with_attention, aux = attn(grids, tokens, return_aux=True)
+        torch.testing.assert_close(with_attention, expected, rtol=1e-5, atol=1e-6)
+        torch.testing.assert_close(aux["relation_map"], expected_aux["relation_map"],
+                                   rtol=1e-5, atol=1e-6)
+        attn.attention_on = False  # the warm-up's forward
+        torch.testing.assert_close(attn(grids, tokens), expected, rtol=0, atol=0)
+        attn.attention_on = True
+        attn.attn.weight.normal_()
+        with pytest.raises(AssertionError):
+            torch.testing.assert_close(attn(grids, tokens, return_aux=True)[1]["relation_map"],
+                                       expected_aux["relation_map"], rtol=1e-5, atol=1e-6)
+
+
+def test_word_matmuls_equal_per_pair_weights():
+    """README: each relation layer applies every word's weights to all pairs in one matmul and
+    mixes the results by attention, "same output" as building W_ij = sum_k alpha_ij(k) W(k)
+    per pair. Here the per-pair way is written out: the pair's h_ij = sum_k alpha_ij(k) h(k)
+    is decoded to its own 263 weights (the paper's formulation) and run through the MLP."""
+    data, vocab, grids, tokens = _batch(n=3)
+    torch.manual_seed(1)
+    model = build_model("t-rnet-attn", ModelConfig(vocab_size=len(vocab))).eval()
+    with torch.no_grad():
+        model.attn.weight.normal_()  # attention that differs by pair and word
+        values, aux = model(grids, tokens, return_aux=True)
+        # the pairs and their attention, as the paper defines them
+        b, h, w = grids.shape
+        centre, nbrs = neighbour_index(h, w)
+        phi = model.phi(grids).flatten(1, 2)
+        phi_i, phi_j = phi[:, centre], phi[:, nbrs]                      # (B, N, k), (B, N, 8, k)
+        words, mask, mean = model.text(tokens)
+        pair = torch.cat([phi_i.unsqueeze(2).expand_as(phi_j), phi_j], -1)  # [phi_i; phi_j]
+        score = torch.einsum("bnpd,bld->bnpl", pair, model.attn(words))
+        alpha = score.masked_fill(~mask[:, None, None, :], float("-inf")).softmax(-1)
+        h_ij = torch.einsum("bnpl,blh->bnph", alpha, words)                # (B, N, 8, 30)
+        w1, w2, w3 = model.split_params(model.decoder(h_ij))              # per pair (.., out, in)
+        rel = relative_positions(1).expand(b, h * w, -1).unsqueeze(-1)
+        x = torch.cat([pair, rel], -1).unsqueeze(-1)                      # (B, N, 8, 2k+1, 1)
+        r = (w3 @ torch.tanh(w2 @ torch.tanh(w1 @ x))).squeeze(-1).squeeze(-1)
+        z1 = r.max(-1).values.view(b, h, w)
+        torch.testing.assert_close(aux["relation_map"], z1, rtol=1e-4, atol=1e-5)
+        torch.testing.assert_close(values, model.head(z1, model.decoder(mean)[:, -3:]),
+                                   rtol=1e-4, atol=1e-5)
+        assert z1.std() > 0.01  # not a degenerate map that any computation would match

@@ -22,7 +22,9 @@ from .demo import executable
 from .grounder_node import LATCHED
 from .node_support import stop_processes
 
-NAMESPACE = "/bench"
+# a namespace of this process's own (like the demo's): two benches, or a bench and a test
+# run, that share a ROS_DOMAIN_ID never answer each other's requests
+NAMESPACE = f"/bench_{os.getpid()}"
 
 
 def process_rss_mb(pid: int | str = "self") -> float:

@@ -3,7 +3,8 @@ spatial_grounding_ros.grounder.Grounder.
 
 Holds the latest valid entity_map and instruction; grounds when an instruction arrives and a
 map is held (or when a map arrives for an instruction that is still waiting), then publishes
-goal_pose, value_map, value_map_raw, relation_map and an OK diagnostic. Bad input gets a
+goal_pose, value_map, value_map_raw, relation_map and an OK diagnostic; each accepted map gets an
+OK diagnostic too (`<node>: entity_map`, with the map's stamp). Bad input gets a
 warning, a WARN diagnostic on /diagnostics, no goal, and the node keeps running.
 """
 from __future__ import annotations
@@ -93,6 +94,14 @@ class GrounderNode(Node):
                         f"entity_map rejected: {exc}; no map held until a valid one arrives")
             return
         self.grid, self.map_msg = grid, msg
+        # an OK per accepted map, naming its stamp: a client can tell that the node holds the
+        # map it sent before it sends an instruction (topics are not ordered among each other)
+        stamp = msg.header.stamp
+        self.report("entity_map", DiagnosticStatus.OK,
+                    f"holding a {grid.shape[0]}x{grid.shape[1]} entity_map (frame "
+                    f"{msg.header.frame_id!r}, stamp {stamp.sec}.{stamp.nanosec:09d})",
+                    stamp_sec=stamp.sec, stamp_nanosec=stamp.nanosec,
+                    height=grid.shape[0], width=grid.shape[1])
         if self.instruction is not None and (
                 self.instruction_pending or self.param("reground_on_map_change")):
             self.ground()
