@@ -76,3 +76,21 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
         assert processes[parameter].returncode == 1, (parameter, err)
         assert err.splitlines() == [err.strip()] and err.startswith("grounder: error: "), err
         assert needle in err, (parameter, err)
+
+
+def test_a_bad_params_file_is_one_line_of_ours_and_exit_1(tmp_path):
+    """README: a missing or malformed --params-file exits 1 with our one error line after
+    rcl's own parse error, and no traceback."""
+    exe = Path(sys.executable).parent / "grounder"
+    if not exe.is_file():
+        pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
+    malformed = tmp_path / "malformed.yaml"
+    malformed.write_text("spatial_grounder: [unclosed\n")
+    for path in (tmp_path / "missing.yaml", malformed):
+        result = subprocess.run([str(exe), "--ros-args", "--params-file", str(path)],
+                                capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1, result.stderr
+        assert "Traceback" not in result.stderr
+        ours = [line for line in result.stderr.splitlines() if "[rcl]" not in line]
+        assert len(ours) == 1 and ours[0].startswith("grounder: error: "), result.stderr
+        assert "params file" in ours[0], result.stderr

@@ -32,7 +32,11 @@ def report(node: Node, publisher: Publisher, part: str, level: bytes, message: s
 
 
 def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as exc:  # rclpy's RCLError: a missing or malformed --params-file, ...
+        print(f"{name}: error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
     node = None
     try:
         node = make_node()
