@@ -225,7 +225,8 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
     test = test_data if test_data is not None else load_episodes(task, "test", str(data_dir))
     shape = tuple(train.grids.shape[1:])
     cfg = RLConfig(**{**asdict(cfg), "step_limit": cfg.step_limit or 5 * max(shape),
-                      "mirrors": TASK_SETTINGS[task]["mirrors"] if cfg.mirrors is None else cfg.mirrors})
+                      "mirrors": TASK_SETTINGS.get(task, {}).get("mirrors", True) if cfg.mirrors is None
+                      else cfg.mirrors})
     # the mirror images' swapped direction words are trained on too
     vocab = Vocabulary.build(list(train.instructions) + [
         mirror_instruction(t, axes) for t in train.instructions if cfg.mirrors

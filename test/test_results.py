@@ -87,14 +87,16 @@ def readme_section(heading: str) -> str:
 
 
 @pytest.mark.parametrize("heading, results_file", [("Results: value maps", "value_map.md"),
-                                                   ("Results: RL", "rl.md")])
+                                                   ("Results: RL", "rl.md"),
+                                                   ("Results: clear references", "suite.md")])
 def test_readme_table_is_the_results_file(heading, results_file):
-    """The table under the README heading is results/<file>'s table cell for cell (and the
-    file's caption line is there too): what `make reproduce` wrote is what the README says."""
+    """The table under the README heading with results/<file>'s header is that file's table
+    cell for cell (and the file's caption line is there too): what `make reproduce` wrote is
+    what the README says."""
     source = (RESULTS / results_file).read_text()
     [expected] = tables(source)
     section = readme_section(heading)
-    got = tables(section)[0]
+    [got] = [t for t in tables(section) if t[0] == expected[0]] or [tables(section)[0]]
     assert len(got) == len(expected), f"README has {len(got)} rows, {results_file} {len(expected)}"
     for i, (a, b) in enumerate(zip(got, expected)):
         assert a == b, f"row {i} differs: README {a} vs {results_file} {b}"
@@ -141,3 +143,16 @@ def test_rl_table_is_the_json():
         for h in [h for h in row if re.fullmatch(r"\w+ ours", h)]:
             assert same_number(row[h], run["test"][h.split()[0].lower()]), (row["task"], h)
         assert int(row["episodes"]) == run["episodes"]
+
+
+def test_suite_table_is_the_json():
+    """results/suite.md: each checkpoint's hit per family and size is suite.json's."""
+    runs = json.loads((RESULTS / "suite.json").read_text())["runs"]
+    [table] = tables((RESULTS / "suite.md").read_text())
+    header, *rows = table
+    assert header[2:] == list(runs)
+    for row in rows:
+        family, size = row[0], row[1]
+        for cell, run in zip(row[2:], runs.values()):
+            summary = run["sizes"][size] if family == "**all**" else run["families"][family][size]
+            assert cell.split()[0].strip("*") == f"{summary['hit']:.1%}", (family, size)

@@ -17,6 +17,7 @@ def tiny_run(tmp_path, seed: int, select: str) -> dict:
     on purpose, so that validation swings from epoch to epoch as it does early in a real
     run, and the epochs the rules pick differ. Returns the checkpoint's header."""
     tc = TrainConfig(epochs=EPOCHS, batch_size=16, lr=0.05, synthetic=0, mirrors=False,
+                     world_instructions=False, goal_weight=0.0,
                      select=select, seed=seed, threads=1)
     path, summary = train_supervised("pw-local", "t-cnn", "", tmp_path / f"{select}{seed}", tc,
                                      train_data=generate(160, seed=seed, mode="local"),
@@ -24,7 +25,7 @@ def tiny_run(tmp_path, seed: int, select: str) -> dict:
     header = load_checkpoint(path).header
     assert header["best_epoch"] == summary["best_epoch"]
     # the weights kept are the chosen epoch's: evaluated again, they give its history entry
-    _, val_mse, val_pq = header["loss_history"][header["best_epoch"]]
+    _, val_mse, val_pq, _ = header["loss_history"][header["best_epoch"]]  # gen. HIT: 0, none here
     assert round(header["val_metrics"]["mse"], 5) == val_mse
     assert round(header["val_metrics"]["pq"], 5) == val_pq
     return header
@@ -40,10 +41,12 @@ def test_kept_epoch_is_the_second_halfs_best_validation_pq_or_the_lowest_mse(tmp
         history = pq_run["loss_history"]
         assert mse_run["loss_history"] == history  # selection does not change training
         mses, pqs = [h[1] for h in history], [h[2] for h in history]
-        # --select pq: the best PQ among epochs 3..5, the lower MSE among equal PQs
+        # --select pq: the best validation PQ + generated HIT (no generated worlds here: 0)
+        # among epochs 3..5, the lower MSE among equal scores
+        scores = [h[2] + h[3] for h in history]
         second = range(EPOCHS // 2, EPOCHS)
-        best = max(pqs[e] for e in second)
-        tied = [e for e in second if pqs[e] == best]
+        best = max(scores[e] for e in second)
+        tied = [e for e in second if scores[e] == best]
         assert pq_run["best_epoch"] == min(tied, key=lambda e: mses[e])
         # --select mse: the lowest MSE of all epochs
         assert mse_run["best_epoch"] == int(np.argmin(mses))
@@ -69,7 +72,8 @@ def test_puddleworld_validation_holds_out_whole_worlds(data_dir, task, worlds):
 
 def test_training_validates_on_the_world_split(data_dir, tmp_path):
     """train_supervised's validation set is split_by_world's (one epoch on PW local)."""
-    tc = TrainConfig(epochs=1, synthetic=0, mirrors=False, seed=2, threads=1)
+    tc = TrainConfig(epochs=1, synthetic=0, mirrors=False, world_instructions=False, seed=2,
+                     threads=1)
     path, summary = train_supervised("pw-local", "t-cnn", data_dir, tmp_path, tc, progress=False)
     train, val = datasets.split_by_world(datasets.load_task("pw-local", "train", data_dir), 0.1,
                                          seed=2)
