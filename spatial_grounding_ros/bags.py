@@ -1,8 +1,10 @@
 """rosbag2 (MCAP) bags without rclpy, with the `rosbags` library: a writer for the recorder,
 and `spatial-grounding eval-bag`, which scores the goals recorded in a bag.
 
-Bags are written in rosbag2 metadata version 9 with MCAP storage and the ROS 2 Jazzy type
-store, which is what `ros2 bag info/play` of Jazzy reads.
+Bags are written as `ros2 bag record -s mcap` of Jazzy writes them: rosbag2 metadata version
+9, `ros_distro: jazzy`, MCAP storage with the Jazzy type store's message definitions, each
+channel's `offered_qos_profiles` (the publishers' QoS, when the recorder knows them) and
+`topic_type_hash` (RIHS01), and each message's log_time (reception) and publish_time.
 
 Evaluation pairs every instruction with the goal_pose that answered it (the first goal after
 the instruction and before the next one) and with the truth recorded for it (the latest
@@ -24,6 +26,7 @@ import numpy as np
 from . import world
 
 STORE = "ROS2_JAZZY"
+ROS_DISTRO = "jazzy"
 BAG_VERSION = 9
 TOPICS = {  # role -> default topic name (relative names match any namespace)
     "instruction": "instruction", "goal": "goal_pose", "truth": "true_goal",
@@ -45,13 +48,25 @@ def typestore():
     return get_typestore(getattr(Stores, STORE))
 
 
-def qos(latched: bool, depth: int = 1000):
-    """A rosbags QoS profile for a topic's metadata: transient local for latched topics, so
-    `ros2 bag play` offers them latched again."""
-    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
-                                    QosReliability, QosTime)
+INFINITE_NS = 2 ** 63 - 1  # RMW_DURATION_INFINITE, as rclpy reports it
 
-    infinite = QosTime(sec=2147483647, nsec=4294967295)
+
+def duration(ns: int):
+    """A rosbags QosTime of `ns` nanoseconds (infinite = 9223372036 s 854775807 ns)."""
+    from rosbags.interfaces import QosTime
+
+    sec, nsec = divmod(int(ns), 10 ** 9)
+    return QosTime(sec=sec, nsec=nsec)
+
+
+def qos(latched: bool, depth: int = 1000):
+    """A stand-in QoS profile for a topic whose publishers are unknown (a bag written from
+    messages, not recorded): transient local for latched topics, so `ros2 bag play` offers
+    them latched again."""
+    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
+                                    QosReliability)
+
+    infinite = duration(INFINITE_NS)
     return Qos(history=QosHistory.KEEP_LAST, depth=1 if latched else depth,
                reliability=QosReliability.RELIABLE,
                durability=QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
@@ -59,21 +74,88 @@ def qos(latched: bool, depth: int = 1000):
                liveliness_lease_duration=infinite, avoid_ros_namespace_conventions=False)
 
 
+def _jazzy_writer_classes():
+    """rosbags' rosbag2 Writer and its MCAP storage, with what rosbags 0.11 leaves out and
+    rosbag2's Jazzy MCAP plugin writes: each channel's `topic_type_hash` beside
+    `offered_qos_profiles`, a message's publish_time apart from its log_time, and
+    `ros_distro: jazzy` (rosbags writes `rosbags`) in the bag's metadata, both the embedded
+    copy and metadata.yaml."""
+    from io import BytesIO
+
+    import yaml
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.rosbag2.storage_mcap import (Channel, McapWriter, write_channel,
+                                              write_record, write_string, write_uint16,
+                                              write_uint32, write_uint64)
+
+    class JazzyMcapWriter(McapWriter):
+        publish_time: int | None = None  # of the next message; None: its log_time
+
+        def add_connection(self, connection, offered_qos_profiles: str) -> None:
+            metadata = BytesIO()
+            for key, value in (("offered_qos_profiles", offered_qos_profiles),
+                               ("topic_type_hash", connection.digest)):
+                write_string(metadata, key)
+                write_string(metadata, value)
+            self.channels.append(Channel(connection.id, connection.msgtype, connection.topic,
+                                         connection.ext.serialization_format,
+                                         metadata.getvalue()))
+            self.channel_stats[connection.id] = 0
+            write_channel(self.chunk.bio, self.channels[-1], self.schemas)
+
+        def write(self, connection, timestamp: int, data) -> None:
+            publish_time = timestamp if self.publish_time is None else self.publish_time
+            self.message_start_time = min(timestamp, self.message_start_time)
+            self.message_end_time = max(timestamp, self.message_end_time)
+            self.channel_stats[connection.id] += 1
+            self.chunk.message_start_time = min(timestamp, self.chunk.message_start_time)
+            self.chunk.message_end_time = max(timestamp, self.chunk.message_end_time)
+            self.chunk.msgs[connection.id].append((timestamp, self.chunk.bio.tell()))
+            record = BytesIO()
+            write_uint16(record, connection.id)
+            write_uint32(record, 0)              # sequence
+            write_uint64(record, timestamp)      # log_time: when the recorder received it
+            write_uint64(record, publish_time)   # publish_time: when it was sent
+            record.write(data)
+            write_record(self.chunk.bio, 0x05, record)
+            if self.chunk.bio.tell() > 2 ** 20:
+                self.close_chunk()
+
+        def close(self, version: int, metadata: str) -> None:
+            info = yaml.safe_load(metadata)
+            info["ros_distro"] = ROS_DISTRO
+            super().close(version, yaml.safe_dump(info, sort_keys=False).strip())
+
+    class JazzyWriter(Writer):
+        STORAGE_PLUGINS = {**Writer.STORAGE_PLUGINS, StoragePlugin.MCAP: JazzyMcapWriter}
+
+        def close(self) -> None:
+            super().close()
+            info = yaml.safe_load(self.metapath.read_text())
+            info["rosbag2_bagfile_information"]["ros_distro"] = ROS_DISTRO
+            self.metapath.write_text(yaml.safe_dump(info, sort_keys=False))
+
+    return JazzyWriter, StoragePlugin.MCAP
+
+
 class BagWriter:
     """Serialized (CDR) messages into a new rosbag2 MCAP bag directory.
 
         with BagWriter("run1") as bag:
             bag.write("/gridworld/instruction", "std_msgs/msg/String", t_ns, cdr_bytes)
+
+    A topic's connection is made at its first message, with the `offered_qos` and
+    `type_hash` given then (a recorder passes the publishers'), else a stand-in QoS (see
+    qos()) and the type store's hash.
     """
 
     def __init__(self, path: str | Path, latched: set[str] = frozenset()):
-        from rosbags.rosbag2 import StoragePlugin, Writer
-
         self.path = Path(path)
         if self.path.exists():
             raise FileExistsError(f"{self.path}: already exists; a bag needs a new directory")
         self.store, self.latched = typestore(), set(latched)
-        self.writer = Writer(self.path, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
+        writer_class, storage = _jazzy_writer_classes()
+        self.writer = writer_class(self.path, version=BAG_VERSION, storage_plugin=storage)
         self.connections = {}
         self.counts: dict[str, int] = {}
 
@@ -89,13 +171,24 @@ class BagWriter:
             self.writer.close()
             self.writer = None
 
-    def write(self, topic: str, msgtype: str, timestamp_ns: int, data: bytes) -> None:
+    def write(self, topic: str, msgtype: str, timestamp_ns: int, data: bytes, *,
+              publish_time_ns: int | None = None, offered_qos: list | None = None,
+              type_hash: str | None = None) -> None:
+        """Store one message; `timestamp_ns` is its log_time (reception), `publish_time_ns`
+        when it was sent (default: the same)."""
         if topic not in self.connections:
+            msgdef, _ = self.store.generate_msgdef(msgtype, ros_version=2)
             self.connections[topic] = self.writer.add_connection(
-                topic, msgtype, typestore=self.store,
-                offered_qos_profiles=[qos(topic in self.latched)])
+                topic, msgtype, msgdef=msgdef,
+                rihs01=type_hash or self.store.hash_rihs01(msgtype),
+                offered_qos_profiles=offered_qos or [qos(topic in self.latched)])
             self.counts[topic] = 0
-        self.writer.write(self.connections[topic], int(timestamp_ns), bytes(data))
+        storage = self.writer.storage
+        storage.publish_time = None if publish_time_ns is None else int(publish_time_ns)
+        try:
+            self.writer.write(self.connections[topic], int(timestamp_ns), bytes(data))
+        finally:
+            storage.publish_time = None
         self.counts[topic] += 1
 
     def write_message(self, topic: str, msgtype: str, timestamp_ns: int, msg) -> None:
