@@ -16,9 +16,11 @@ import pytest
 import yaml
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
+make_reader = pytest.importorskip(
+    'mcap.reader', reason='the mcap reader is not installed (pip install mcap, requirements.txt)'
+).make_reader
 
 from grounder_helpers import unique_namespace  # noqa: E402
-from mcap.reader import make_reader  # noqa: E402
 from nav_msgs.msg import OccupancyGrid  # noqa: E402
 from rclpy.duration import Duration  # noqa: E402
 from rclpy.node import Node  # noqa: E402

@@ -140,17 +140,57 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
 
 
 def test_closed_loop_demo(tmp_path, capsys):
+    """Two episodes through the real processes. The grounder hears the first instruction as
+    it is published (no episode is restarted): the bag holds exactly one instruction and one
+    goal per episode. Its agent poses were logged on reception, although this process drew a
+    PNG between episodes."""
     from spatial_grounding_ros.ros.demo import run_demo
 
-    summary = run_demo(tmp_path, episodes=2, seed=1, data_dir=str(tmp_path / "no_data"),
+    summary = run_demo(tmp_path, episodes=2, seed=1, data_dir=str(tmp_path / 'no_data'),
                        step_period=0.02)
     out = capsys.readouterr().out
-    assert summary["episodes"] == 2
+    assert summary['episodes'] == 2
     # each episode's outcome is its own: terminated exactly when it ended on the true goal
-    for episode in summary["per_episode"]:
-        assert episode["reached"] == (episode["end"] == episode["truth"]), episode
-    assert [line[:3] for line in out.splitlines() if line.startswith("[")] == ["[0]", "[1]"]
-    assert (tmp_path / "episode_0.png").stat().st_size > 1000
-    assert summary["from_bag"]["n"] == 2
-    assert summary["from_bag"]["md"] == pytest.approx(summary["md"])
-    assert "pq" in summary["from_bag"]
+    for episode in summary['per_episode']:
+        assert episode['reached'] == (episode['end'] == episode['truth']), episode
+    assert [line[:3] for line in out.splitlines() if line.startswith('[')] == ['[0]', '[1]']
+    assert (tmp_path / 'episode_0.png').stat().st_size > 1000
+    assert summary['from_bag']['n'] == 2 and summary['from_bag']['unanswered'] == 0
+    assert summary['from_bag']['md'] == pytest.approx(summary['md'])
+    assert 'pq' in summary['from_bag']
+    recorded = {topic.rsplit('/', 1)[1]: n for topic, n in summary['recorded'].items()}
+    assert recorded['instruction'] == 2 and recorded['goal_pose'] == 2, recorded
+    assert recorded['agent_pose'] == recorded['reward'] + 2  # a start pose per episode
+
+    make_reader = pytest.importorskip('mcap.reader', reason='pip install mcap').make_reader
+    [mcap_file] = (tmp_path / 'demo_bag').glob('*.mcap')
+    with open(mcap_file, 'rb') as stream:
+        delays = [m.log_time - m.publish_time
+                  for _, c, m in make_reader(stream).iter_messages()
+                  if c.topic.endswith('/agent_pose')]
+    assert delays and max(delays) < 0.5e9, max(delays) / 1e9
+
+
+@pytest.mark.parametrize('parameter, needle', [
+    ('step_period:=-1.0', 'parameter step_period must be 0.001..60, got -1.0'),
+    ('step_period:=1', 'parameter step_period must be a double (write 5.0, not 5), got an'),
+    ('source:=nowhere', 'parameter source must be one of generator, generator-local'),
+    ('seed:=abc', "parameter seed must be an integer, got a string 'abc'"),
+    ('frame_id:=""', 'parameter frame_id must not be empty'),
+    ('source:=isi', 'data file not found'),  # a task whose data is not in data_dir
+])
+def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path, parameter, needle):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    exe = Path(sys.executable).parent / 'gridworld'
+    if not exe.is_file():
+        pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
+    result = subprocess.run([str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}_bad', '-p',
+                             parameter, '-p', f'data_dir:={tmp_path / "no_data"}'],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1, result.stderr
+    err = result.stderr
+    assert err.splitlines() == [err.strip()] and err.startswith('gridworld: error: '), err
+    assert needle in err, err

@@ -61,33 +61,45 @@ def test_ament_index_finds_executables_and_share_files(install_prefix, ament_env
         exe = prefix / "lib" / PACKAGE / name
         assert exe.is_file() and os.access(exe, os.X_OK), exe
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
-    for name in ("config/grounder.yaml", "config/entities_puddleworld.yaml",
-                 "config/entities_isi.yaml", "launch/grounder.launch.py", "package.xml"):
+    for name in INSTALLED:
         assert (share / name).is_file(), name
 
 
-def test_installed_launch_file_is_the_checked_one(install_prefix, ament_env):
-    """The launch file colcon installs is the source file whose arguments, node and
-    parameters test_ros_config checks (that part needs no ROS launch)."""
+# what the share directory must hold, each a copy of the source file
+INSTALLED = ("config/grounder.yaml", "config/gridworld.yaml", "config/entities_puddleworld.yaml",
+             "config/entities_isi.yaml", "launch/grounder.launch.py", "launch/demo.launch.py",
+             "rviz/spatial_grounding.rviz", "package.xml", "LICENSE")
+
+
+def test_installed_files_are_the_checked_ones(install_prefix, ament_env):
+    """The launch, params and RViz files colcon installs are the source files whose
+    arguments, nodes, parameters and displays test_ros_config checks (that part needs no
+    ROS launch); the installed params files load with rclpy's parser."""
+    from rclpy.parameter import parameter_dict_from_yaml_file
+
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
-    installed = (share / "launch" / "grounder.launch.py").read_text()
-    assert installed == (REPO / "launch" / "grounder.launch.py").read_text()
-    compile(installed, "grounder.launch.py", "exec")
+    for name in INSTALLED:
+        assert (share / name).read_bytes() == (REPO / name).read_bytes(), name
+    for name in ("grounder.launch.py", "demo.launch.py"):
+        compile((share / "launch" / name).read_text(), name, "exec")
+    for name in ("grounder.yaml", "gridworld.yaml"):
+        assert parameter_dict_from_yaml_file(str(share / "config" / name)), name
 
 
-def test_launch_description_builds_with_ros_launch(install_prefix, ament_env):
-    """What only ROS launch can show: the installed file builds a description holding the
-    grounder Node. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and
-    runs on a ROS 2 system (colcon test)."""
+@pytest.mark.parametrize("name, nodes", [("grounder.launch.py", 1), ("demo.launch.py", 3)])
+def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, name, nodes):
+    """What only ROS launch can show: the installed file builds a description holding its
+    Nodes. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and runs on a
+    ROS 2 system (colcon test)."""
     # launch.actions, not launch: this repository's launch/ folder imports as `launch`
     pytest.importorskip("launch.actions", reason="ROS launch is not installed (not on PyPI); "
                         "test_ros_config checks the file's arguments, node and parameters")
     pytest.importorskip("launch_ros.actions", reason="launch_ros is not installed (not on PyPI)")
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
     namespace = {}
-    exec((share / "launch" / "grounder.launch.py").read_text(), namespace)
+    exec((share / "launch" / name).read_text(), namespace)
     description = namespace["generate_launch_description"]()
-    assert any(type(e).__name__ == "Node" for e in description.entities)
+    assert sum(type(e).__name__ == "Node" for e in description.entities) == nodes
 
 
 def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env,

@@ -54,8 +54,9 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
 
 
 def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
-    """README: a bad checkpoint or entity table stops the node at start-up with one line
-    `grounder: error: ...` and exit status 1 (no traceback), naming the problem."""
+    """README: a bad checkpoint, entity table or parameter value or type stops the node at
+    start-up with one line `grounder: error: ...` and exit status 1 (no traceback), naming
+    the problem."""
     exe = Path(sys.executable).parent / "grounder"
     if not exe.is_file():
         pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
@@ -66,6 +67,14 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
         f"checkpoint:={corrupt}": "corrupt.pt: not a readable checkpoint",
         "entity_table:=entities_isi.yaml": "is not the one checkpoint pw_t-rnet-attn was trained on",
         "entity_table:=no_such_table.yaml": "no_such_table.yaml: config file not found",
+        # parameters are checked against their declared type and range before anything loads
+        "max_cells:=abc": "parameter max_cells must be an integer, got a string 'abc'",
+        "max_cells:=-5": "parameter max_cells must be 1..16777216, got -5",
+        "max_instruction_chars:=0": "parameter max_instruction_chars must be 1..100000, got 0",
+        "torch_threads:=-3": "parameter torch_threads must be 0..1024, got -3",
+        "value_map_encoding:=heat": "parameter value_map_encoding must be one of display, cost",
+        "reground_on_map_change:=1": "parameter reground_on_map_change must be a bool, got an",
+        "default_frame_id:=''": "parameter default_frame_id must not be empty",
     }
     namespace = unique_namespace("start_up_test")
     processes = {p: subprocess.Popen([str(exe), "--ros-args", "-r", f"__ns:={namespace}",

@@ -75,6 +75,21 @@ def test_value_map_is_scaled_to_0_100_in_grid_order():
     assert list(flat.data) == [0, 0, 0, 0]
 
 
+def test_cost_encoding_puts_the_best_cell_at_0_as_a_costmap_reads_it():
+    """`value_map_encoding: cost`: the reverse of the display scale, best 0, worst 100
+    (lethal), so a planner reading value_map as a costmap is drawn to the goal."""
+    values = np.array([[3.0, -1.0], [1.0, 0.0]])  # row 0 = north
+    info = convert.map_info((2, 2))
+    cost = convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='cost')
+    display = convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='display')
+    assert list(cost.data) == [50, 75, 0, 100]
+    assert [c + d for c, d in zip(cost.data, display.data)] == [100] * 4
+    flat = convert.value_map_to_occupancy_grid(np.full((2, 2), 7.0), HEADER, info, 'cost')
+    assert list(flat.data) == [0, 0, 0, 0]
+    with pytest.raises(ValueError, match="unknown value map encoding 'heat'"):
+        convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='heat')
+
+
 def test_relation_map_is_magnitude_with_zero_kept():
     z1 = np.array([[-2.0, 0.0], [1.0, 0.5]])
     msg = convert.magnitude_to_occupancy_grid(z1, HEADER, convert.map_info((2, 2)))

@@ -19,6 +19,8 @@ from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 from ..bags import multiarray_to_map
 
 PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
+# value_map cells: best = 100 (display) or best = 0 (cost, as a costmap reads it)
+VALUE_MAP_ENCODINGS = ('display', 'cost')
 
 
 def _quaternion(pose: Pose) -> np.ndarray:
@@ -102,14 +104,23 @@ def _scaled_grid(percent: np.ndarray, header: Header, info: MapMetaData) -> Occu
     return msg
 
 
-def value_map_to_occupancy_grid(values: np.ndarray, header: Header, info: MapMetaData
-                                ) -> OccupancyGrid:
-    """A value map (row 0 = north) -> OccupancyGrid, min..max scaled to 0..100 (a constant
-    map is all 0), for RViz's map display."""
+def value_map_to_occupancy_grid(values: np.ndarray, header: Header, info: MapMetaData,
+                                encoding: str = 'display') -> OccupancyGrid:
+    """A value map (row 0 = north) -> OccupancyGrid, min..max scaled to 0..100.
+
+    `display`: the best cell is 100, the worst 0 (a constant map is all 0), for a colour
+    ramp in RViz. `cost`: the reverse, best 0 and worst 100 (a constant map is all 0), as a
+    costmap reads cells (100 = lethal), so a planner is drawn to the goal, not kept out.
+    """
+    if encoding not in VALUE_MAP_ENCODINGS:
+        raise ValueError(f"unknown value map encoding {encoding!r}; use one of "
+                         f"{', '.join(VALUE_MAP_ENCODINGS)}")
     values = np.asarray(values, dtype=np.float64)
-    low, span = values.min(), np.ptp(values)
-    percent = (values - low) / span * PERCENT if span > 0 else np.zeros_like(values)
-    return _scaled_grid(percent, header, info)
+    low, high, span = values.min(), values.max(), np.ptp(values)
+    if span == 0:
+        return _scaled_grid(np.zeros_like(values), header, info)
+    scaled = (values - low) if encoding == 'display' else (high - values)
+    return _scaled_grid(scaled / span * PERCENT, header, info)
 
 
 def magnitude_to_occupancy_grid(values: np.ndarray, header: Header, info: MapMetaData
@@ -153,8 +164,11 @@ def cell_centre(cell: tuple[int, int], info: MapMetaData) -> tuple[float, float,
 
 def cell_to_pose(cell: tuple[int, int], info: MapMetaData, frame_id: str,
                  stamp: Time) -> PoseStamped:
-    """A goal at the centre of data-set cell (row, col). Orientation is the identity: the
-    instruction names a place, not a heading."""
+    """A goal at the centre of data-set cell (row, col), stamped `stamp`.
+
+    Orientation is the identity in `frame_id` (facing the frame's +x, not the grid's east
+    when the origin is rotated): the instruction names a place, not a heading.
+    """
     pose = PoseStamped()
     pose.header.frame_id, pose.header.stamp = frame_id, stamp
     pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = cell_centre(cell, info)

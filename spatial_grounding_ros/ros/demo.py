@@ -1,8 +1,12 @@
 """The closed-loop demo: the gridworld and grounder nodes run as real processes in a namespace
 of their own; the grounder answers each episode's instruction with a goal_pose, the gridworld
-walks its agent there cell by cell. This process watches the topics, records every one of them
-to an MCAP bag, prints one line per episode and a summary (also computed back from the bag
-with eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+walks its agent there cell by cell. A recorder in a thread of its own records every topic to
+an MCAP bag (log_time at reception, whatever this thread is doing); this thread watches the
+topics, prints one line per episode and a summary (also computed back from the bag with
+eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+
+The gridworld publishes its first episode only once the grounder, the recorder and the
+watcher all subscribe to `instruction`, so each hears it live: no episode is restarted.
 """
 from __future__ import annotations
 
@@ -26,7 +30,7 @@ from ..bags import evaluate_bag
 from ..entities import PUDDLEWORLD
 from ..plots import plot_grounding
 from . import convert
-from .bag_recorder import BagRecorder
+from .bag_recorder import RecordingThread
 from .gridworld_node import LATCHED, STEPS
 from .node_support import stop_processes
 
@@ -90,6 +94,11 @@ class DemoWatcher(Node):
         self.terminated_msgs += 1
         self.terminated = self.terminated or msg.data
 
+    def seen(self) -> dict[str, int]:
+        """Messages of the per-episode topics seen so far in this episode."""
+        return {'goal_pose': len(self.goals), 'agent_pose': len(self.poses),
+                'reward': len(self.rewards), 'terminated': self.terminated_msgs}
+
     def moves_complete(self) -> bool:
         """Every move seen so far (a pose after the start) has its reward and terminated flag
         too: they come on other topics and may trail the pose."""
@@ -127,47 +136,41 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
     source = ["-p", "source:=pw-local", "-p", "split:=test", "-p", f"data_dir:={data_dir}"] \
         if use_data else ["-p", "source:=generator", "-p", f"episodes:={episodes}"]
     namespace = f"/demo_{os.getpid()}"
-    common = ["--ros-args", "-r", f"__ns:={namespace}"]
+    common = ["--ros-args", "-r", f"__ns:={namespace}", "-r", "/diagnostics:=diagnostics"]
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": os.environ.get(
         "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
-    processes = [
-        subprocess.Popen(executable("gridworld") + common + source + [
-            "-p", f"seed:={seed}", "-p", "order:=sequential", "-p", f"step_limit:={step_limit}",
-            "-p", f"step_period:={step_period}", "-p", "diagnostics_topic:=diagnostics"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-        subprocess.Popen(executable("grounder") + common + [
-            "-p", "diagnostics_topic:=diagnostics"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-    ]
-    print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'}) and "
-          f"grounder running in namespace {namespace}; recording to {bag_path}", flush=True)
     rclpy.init()
-    watcher = recorder = None
+    watcher = recording = None
+    processes = []
     executor = SingleThreadedExecutor()
     lines = []
+    recorded_total = {}  # topic -> messages the watcher saw, which the bag must hold too
     try:
         watcher = DemoWatcher(namespace)
-        recorder = BagRecorder(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
         executor.add_node(watcher)
-        executor.add_node(recorder)
-        spin_until(executor, lambda: watcher.reset_client.service_is_ready(), 30, "gridworld node")
-        spin_until(executor, lambda: ("spatial_grounder", namespace) in
-                   watcher.get_node_names_and_namespaces(), 60, "grounder node")
+        recording = RecordingThread(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
+        processes = [
+            subprocess.Popen(executable("grounder") + common,
+                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+            # the first episode waits for the instruction's three subscribers: the grounder,
+            # the recorder and the watcher
+            subprocess.Popen(executable("gridworld") + common + source + [
+                "-p", f"seed:={seed}", "-p", "order:=sequential",
+                "-p", f"step_limit:={step_limit}", "-p", f"step_period:={step_period}",
+                "-p", "start_after_subscribers:=3"],
+                env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+        ]
+        print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'})"
+              f" and grounder running in namespace {namespace}; recording to {bag_path}",
+              flush=True)
         for k in range(episodes):
-            # the grounder takes the instruction as it is published (not the latched copy),
-            # so the first episode is restarted until the grounder's subscription has matched
-            for attempt in range(10 if k == 0 else 1):
+            if k > 0:
                 watcher.clear()
-                client = watcher.reset_client if k == 0 else watcher.next_client
-                future = client.call_async(Trigger.Request())
-                spin_until(executor, future.done, 10, "episode start")
-                try:
-                    spin_until(executor, lambda: watcher.goals and watcher.values is not None
-                               and watcher.relation is not None, 3 if k == 0 else 30, "grounding")
-                    break
-                except TimeoutError:
-                    if k > 0 or attempt == 9:
-                        raise
+                future = watcher.next_client.call_async(Trigger.Request())
+                spin_until(executor, future.done, 30, "next episode")
+            # the first episode also waits for both processes to start and the model to load
+            spin_until(executor, lambda: watcher.goals and watcher.values is not None
+                       and watcher.relation is not None, 120 if k == 0 else 30, "grounding")
             goal = watcher.cell(watcher.goals[0])
 
             def settled() -> bool:
@@ -176,6 +179,8 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
                     watcher.terminated or at == goal or len(watcher.rewards) >= step_limit)
 
             spin_until(executor, settled, step_limit * step_period + 10, "agent arrival")
+            for topic, n in watcher.seen().items():
+                recorded_total[topic] = recorded_total.get(topic, 0) + n
             path = [watcher.cell(p) for p in watcher.poses]
             truth = watcher.cell(watcher.true_goal)
             error = abs(goal[0] - truth[0]) + abs(goal[1] - truth[1])
@@ -195,18 +200,26 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             print(line, flush=True)
             lines.append({"goal": goal, "truth": truth, "end": path[-1],
                           "reached": watcher.terminated, "md": error, "reward": reward})
+        # the recorder hears what the watcher heard; wait until the bag holds it all
+        full = {t: f"{namespace}/{t}" for t in recorded_total}
+        spin_until(executor, lambda: all(recording.counts.get(full[t], 0) >= n
+                                         for t, n in recorded_total.items()), 30,
+                   "recording of the last messages")
     finally:
-        for node in (watcher, recorder):
-            if node is not None:
-                executor.remove_node(node)
-                node.destroy_node()
+        recorded = {}
+        if recording is not None:
+            recording.stop()
+            recorded = recording.counts
+        if watcher is not None:
+            executor.remove_node(watcher)
+            watcher.destroy_node()
         rclpy.try_shutdown()
         stop_processes(*processes)
     summary = {"episodes": len(lines), "reached": sum(l["reached"] for l in lines),
                "md": float(np.mean([l["md"] for l in lines])) if lines else None,
                "reward": float(np.mean([l["reward"] for l in lines])) if lines else None,
                "bag": str(bag_path), "from_bag": evaluate_bag(bag_path).metrics(),
-               "per_episode": lines}
+               "recorded": recorded, "per_episode": lines}
     bag = summary["from_bag"]
     print(f"summary: {summary['reached']}/{summary['episodes']} episodes reached the goal, "
           f"mean Manhattan error {summary['md']:.2f}, mean reward {summary['reward']:.2f}; "

@@ -116,7 +116,7 @@ def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
               "episodes": len(train), "seed": seed, "order": "random",
               "step_limit": step_limit + 1}  # the client cuts episodes off itself
     cmd = [sys.executable, "-m", "spatial_grounding_ros.ros.gridworld_node", "--ros-args",
-           "-r", f"__ns:={namespace}", "-p", "diagnostics_topic:=diagnostics"]
+           "-r", f"__ns:={namespace}", "-r", "/diagnostics:=diagnostics"]
     for k, v in params.items():
         cmd += ["-p", f"{k}:={v}"]
     node_process = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
