@@ -70,7 +70,8 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id="map", gr
     graph, grounder, probe = nodes
     grid = WORLDS.grids[world] if grid is None else grid
     text = WORLDS.instructions[world]
-    wait_held(nodes, probe.publish_map(grid, info, frame_id))
+    map_message = probe.publish_map(grid, info, frame_id)
+    wait_held(nodes, map_message)
     before = probe.counts()
     probe.publish_instruction(text)
     outputs = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics")
@@ -80,11 +81,14 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id="map", gr
     info = info or convert.map_info(grid.shape)
     [goal] = probe.new("goals", before)
     assert goal.header.frame_id == frame_id
+    # README: the goal (and the maps) carry the entity map's stamp, not the time of grounding
+    assert goal.header.stamp == map_message.header.stamp
     assert (goal.pose.position.x, goal.pose.position.y, goal.pose.position.z) == pytest.approx(
         convert.cell_centre(expected.goal, info))
     np.testing.assert_allclose(raw_values(probe.new("raw_maps", before)[-1]), expected.values,
                                rtol=1e-6, atol=1e-6)
     [value_map] = probe.new("value_maps", before)
+    assert value_map.header.stamp == map_message.header.stamp
     assert (value_map.info.width, value_map.info.height) == (grid.shape[1], grid.shape[0])
     assert value_map.info.resolution == info.resolution
     assert value_map.header.frame_id == frame_id
@@ -269,6 +273,29 @@ def test_empty_frame_id_takes_default_frame_id(nodes, reference):
                 assert probe.new(k, before)[-1].header.frame_id == default, (k, default)
     finally:
         grounder.set_parameters([Parameter("default_frame_id", value="map")])
+
+
+def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
+    """`ros2 param set ... value_map_encoding cost`: the next value_map has the goal cell at
+    0 and the worst cell at 100, each cell 100 minus its display value; `display` again
+    restores the best = 100 scale."""
+    graph, grounder, probe = nodes
+    good_request(nodes, reference, world=1)  # display: best = 100 (checked there)
+    shown = probe.value_maps[-1].data
+    try:
+        result = grounder.set_parameters([Parameter("value_map_encoding", value="cost")])
+        assert result[0].successful
+        wait_held(nodes, probe.publish_map(WORLDS.grids[1]))
+        before = probe.counts()
+        probe.publish_instruction(WORLDS.instructions[1])
+        assert graph.wait_for(lambda: probe.new("value_maps", before))
+        [cost] = probe.new("value_maps", before)
+        row, col = reference.ground(WORLDS.grids[1], WORLDS.instructions[1]).goal
+        assert cost.data[(10 - 1 - row) * 10 + col] == 0 and max(cost.data) == 100
+        assert [c + d for c, d in zip(cost.data, shown)] == [100] * 100
+    finally:
+        grounder.set_parameters([Parameter("value_map_encoding", value="display")])
+    good_request(nodes, reference, world=1)
 
 
 class FailingModel(torch.nn.Module):
