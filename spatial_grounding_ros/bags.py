@@ -25,21 +25,21 @@ import numpy as np
 
 from . import world
 
-STORE = "ROS2_JAZZY"
-ROS_DISTRO = "jazzy"
+STORE = 'ROS2_JAZZY'
+ROS_DISTRO = 'jazzy'
 BAG_VERSION = 9
 TOPICS = {  # role -> default topic name (relative names match any namespace)
-    "instruction": "instruction", "goal": "goal_pose", "truth": "true_goal",
-    "map": "entity_map", "values": "value_map_raw", "true_values": "true_value_map",
-    "true_rewards": "true_reward_map",
+    'instruction': 'instruction', 'goal': 'goal_pose', 'truth': 'true_goal',
+    'map': 'entity_map', 'values': 'value_map_raw', 'true_values': 'true_value_map',
+    'true_rewards': 'true_reward_map',
 }
 MSGTYPES = {
-    "instruction": "std_msgs/msg/String", "goal": "geometry_msgs/msg/PoseStamped",
-    "truth": "geometry_msgs/msg/PoseStamped", "map": "nav_msgs/msg/OccupancyGrid",
-    "values": "std_msgs/msg/Float32MultiArray", "true_values": "std_msgs/msg/Float32MultiArray",
-    "true_rewards": "std_msgs/msg/Float32MultiArray",
+    'instruction': 'std_msgs/msg/String', 'goal': 'geometry_msgs/msg/PoseStamped',
+    'truth': 'geometry_msgs/msg/PoseStamped', 'map': 'nav_msgs/msg/OccupancyGrid',
+    'values': 'std_msgs/msg/Float32MultiArray', 'true_values': 'std_msgs/msg/Float32MultiArray',
+    'true_rewards': 'std_msgs/msg/Float32MultiArray',
 }
-REQUIRED = ("instruction", "goal", "truth", "map")
+REQUIRED = ('instruction', 'goal', 'truth', 'map')
 
 
 def typestore():
@@ -93,8 +93,8 @@ def _jazzy_writer_classes():
 
         def add_connection(self, connection, offered_qos_profiles: str) -> None:
             metadata = BytesIO()
-            for key, value in (("offered_qos_profiles", offered_qos_profiles),
-                               ("topic_type_hash", connection.digest)):
+            for key, value in (('offered_qos_profiles', offered_qos_profiles),
+                               ('topic_type_hash', connection.digest)):
                 write_string(metadata, key)
                 write_string(metadata, value)
             self.channels.append(Channel(connection.id, connection.msgtype, connection.topic,
@@ -123,7 +123,7 @@ def _jazzy_writer_classes():
 
         def close(self, version: int, metadata: str) -> None:
             info = yaml.safe_load(metadata)
-            info["ros_distro"] = ROS_DISTRO
+            info['ros_distro'] = ROS_DISTRO
             super().close(version, yaml.safe_dump(info, sort_keys=False).strip())
 
     class JazzyWriter(Writer):
@@ -132,7 +132,7 @@ def _jazzy_writer_classes():
         def close(self) -> None:
             super().close()
             info = yaml.safe_load(self.metapath.read_text())
-            info["rosbag2_bagfile_information"]["ros_distro"] = ROS_DISTRO
+            info['rosbag2_bagfile_information']['ros_distro'] = ROS_DISTRO
             self.metapath.write_text(yaml.safe_dump(info, sort_keys=False))
 
     return JazzyWriter, StoragePlugin.MCAP
@@ -152,14 +152,14 @@ class BagWriter:
     def __init__(self, path: str | Path, latched: set[str] = frozenset()):
         self.path = Path(path)
         if self.path.exists():
-            raise FileExistsError(f"{self.path}: already exists; a bag needs a new directory")
+            raise FileExistsError(f'{self.path}: already exists; a bag needs a new directory')
         self.store, self.latched = typestore(), set(latched)
         writer_class, storage = _jazzy_writer_classes()
         self.writer = writer_class(self.path, version=BAG_VERSION, storage_plugin=storage)
         self.connections = {}
         self.counts: dict[str, int] = {}
 
-    def __enter__(self) -> "BagWriter":
+    def __enter__(self) -> 'BagWriter':
         self.writer.open()
         return self
 
@@ -203,19 +203,20 @@ def open_bag(path: str | Path):
 
     path = Path(path)
     if not path.exists():
-        raise FileNotFoundError(f"{path}: bag not found")
+        raise FileNotFoundError(f'{path}: bag not found')
     if path.is_file():
-        if not (path.parent / "metadata.yaml").is_file():
-            raise ValueError(f"{path}: not a rosbag2 bag (a bag is a directory with "
-                             "metadata.yaml and .mcap or .db3 files)")
+        if not (path.parent / 'metadata.yaml').is_file():
+            raise ValueError(f'{path}: not a rosbag2 bag (a bag is a directory with '
+                             'metadata.yaml and .mcap or .db3 files)')
         path = path.parent
-    if not (path / "metadata.yaml").is_file():
-        raise ValueError(f"{path}: not a rosbag2 bag (no metadata.yaml)")
+    if not (path / 'metadata.yaml').is_file():
+        raise ValueError(f'{path}: not a rosbag2 bag (no metadata.yaml)')
     try:
         reader = Reader(path)
         reader.open()
     except Exception as exc:  # rosbags raises its own error types and OSError/KeyError on junk
-        raise ValueError(f"{path}: not a readable rosbag2 bag ({type(exc).__name__}: {exc})") from exc
+        raise ValueError(f'{path}: not a readable rosbag2 bag '
+                         f'({type(exc).__name__}: {exc})') from exc
     return reader
 
 
@@ -224,18 +225,18 @@ def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[st
     a topic ending in /name (any namespace). Ambiguity is an error naming the candidates."""
     found = {}
     for role, name in wanted.items():
-        if name.startswith("/"):
+        if name.startswith('/'):
             matches = [t for t in available if t == name]
         else:
-            matches = [t for t in available if t == "/" + name or t.endswith("/" + name)]
+            matches = [t for t in available if t == '/' + name or t.endswith('/' + name)]
         if len(matches) > 1:
             raise ValueError(f"several topics match {name!r} ({', '.join(sorted(matches))}): "
                              f"pass the full name with --{role.replace('_', '-')}-topic")
         if matches:
             topic = matches[0]
             if available[topic] != MSGTYPES[role]:
-                raise ValueError(f"topic {topic} has type {available[topic]}, expected "
-                                 f"{MSGTYPES[role]} for the {role} topic")
+                raise ValueError(f'topic {topic} has type {available[topic]}, expected '
+                                 f'{MSGTYPES[role]} for the {role} topic')
             found[role] = topic
     return found
 
@@ -257,11 +258,12 @@ def multiarray_to_map(msg) -> np.ndarray:
     """A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
     row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike."""
     if len(msg.layout.dim) != 2:
-        raise ValueError(f"expected a 2-D Float32MultiArray layout, got {len(msg.layout.dim)} dims")
+        raise ValueError('expected a 2-D Float32MultiArray layout, got '
+                         f'{len(msg.layout.dim)} dims')
     h, w = msg.layout.dim[0].size, msg.layout.dim[1].size
     data = np.asarray(msg.data, dtype=np.float32)[msg.layout.data_offset:]
     if data.size != h * w:
-        raise ValueError(f"{data.size} values for a {h}x{w} layout")
+        raise ValueError(f'{data.size} values for a {h}x{w} layout')
     return data.reshape(h, w)[::-1].copy()
 
 
@@ -282,13 +284,13 @@ class BagEvaluation:
     topics: dict = field(default_factory=dict)
 
     def metrics(self) -> dict:
-        out = {"n": len(self.episodes), "unanswered": self.unanswered, "topics": self.topics}
+        out = {'n': len(self.episodes), 'unanswered': self.unanswered, 'topics': self.topics}
         if not self.episodes:
-            out["md"] = None
+            out['md'] = None
             return out
         md = [abs(e.goal[0] - e.truth[0]) + abs(e.goal[1] - e.truth[1]) for e in self.episodes]
-        out["md"] = float(np.mean(md))
-        out["hit"] = float(np.mean([d == 0 for d in md]))  # the goal_pose is the true goal cell
+        out['md'] = float(np.mean(md))
+        out['hit'] = float(np.mean([d == 0 for d in md]))  # the goal_pose is the true goal cell
         full = [e for e in self.episodes if e.values is not None and e.true_values is not None
                 and e.true_rewards is not None and e.values.shape == e.true_values.shape]
         if full and len({e.values.shape for e in full}) == 1:
@@ -298,9 +300,9 @@ class BagEvaluation:
             terminal = np.zeros(true.shape, bool)
             for t, e in zip(terminal, full):
                 t[e.truth] = True
-            out["pq"] = float(np.mean(world.policy_quality(pred, true, rewards, terminal)))
-            out["mse"] = world.mse(pred, true)
-            out["n_value_maps"] = len(full)
+            out['pq'] = float(np.mean(world.policy_quality(pred, true, rewards, terminal)))
+            out['mse'] = world.mse(pred, true)
+            out['n_value_maps'] = len(full)
         return out
 
 
@@ -314,7 +316,8 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
         missing = [r for r in REQUIRED if r not in found]
         if missing:
             raise ValueError(
-                f"{path}: bag has no {', '.join(f'{r} topic ({wanted[r]!r}, {MSGTYPES[r]})' for r in missing)}; "
+                f"{path}: bag has no "
+                f"{', '.join(f'{r} topic ({wanted[r]!r}, {MSGTYPES[r]})' for r in missing)}; "
                 f"it has: {', '.join(sorted(available)) or 'no topics'}")
         store = typestore()
         role_of = {t: r for r, t in found.items()}
@@ -324,7 +327,8 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
                                                  if c.topic in role_of]):
                 events.append((t, role_of[conn.topic], store.deserialize_cdr(raw, conn.msgtype)))
         except Exception as exc:  # truncated or corrupt chunks
-            raise ValueError(f"{path}: bag is truncated or corrupt ({type(exc).__name__}: {exc})") from exc
+            raise ValueError(f'{path}: bag is truncated or corrupt '
+                             f'({type(exc).__name__}: {exc})') from exc
     finally:
         reader.close()
     events.sort(key=lambda e: e[0])
@@ -336,37 +340,37 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
         if p is None:
             return
         cells = None
-        if p["goal"] is not None and p["truth"] is not None and p["map"] is not None:
-            info = p["map"].info
-            cells = (_cell(p["goal"].pose.position.x, p["goal"].pose.position.y, info),
-                     _cell(p["truth"].pose.position.x, p["truth"].pose.position.y, info))
+        if p['goal'] is not None and p['truth'] is not None and p['map'] is not None:
+            info = p['map'].info
+            cells = (_cell(p['goal'].pose.position.x, p['goal'].pose.position.y, info),
+                     _cell(p['truth'].pose.position.x, p['truth'].pose.position.y, info))
         if cells is None or None in cells:
             result.unanswered += 1
             return
-        ep = Episode(p["instruction"], *cells)
-        if p["values"] is not None:
-            ep.values = multiarray_to_map(p["values"])
-        if {"true_values", "true_rewards"} <= set(p["true"]):
-            ep.true_values = multiarray_to_map(p["true"]["true_values"])
-            ep.true_rewards = multiarray_to_map(p["true"]["true_rewards"])
+        ep = Episode(p['instruction'], *cells)
+        if p['values'] is not None:
+            ep.values = multiarray_to_map(p['values'])
+        if {'true_values', 'true_rewards'} <= set(p['true']):
+            ep.true_values = multiarray_to_map(p['true']['true_values'])
+            ep.true_rewards = multiarray_to_map(p['true']['true_rewards'])
         result.episodes.append(ep)
 
     for _, role, msg in events:
-        if role == "map":
+        if role == 'map':
             latest_map = msg
-        elif role in ("true_values", "true_rewards"):
+        elif role in ('true_values', 'true_rewards'):
             latest_true[role] = msg
-        elif role == "truth":
+        elif role == 'truth':
             truths.append(msg)
-        elif role == "instruction":
+        elif role == 'instruction':
             finish(pending)
-            pending = {"instruction": msg.data, "goal": None, "truth": None, "map": None,
-                       "values": None, "true": {}}
+            pending = {'instruction': msg.data, 'goal': None, 'truth': None, 'map': None,
+                       'values': None, 'true': {}}
         elif pending is None:
             continue
-        elif role == "values" and pending["values"] is None:
-            pending["values"] = msg
-        elif role == "goal" and pending["goal"] is None:
+        elif role == 'values' and pending['values'] is None:
+            pending['values'] = msg
+        elif role == 'goal' and pending['goal'] is None:
             pending.update(goal=msg, truth=truths[-1] if truths else None, map=latest_map,
                            true=dict(latest_true))
             truths = []
@@ -375,28 +379,28 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
 
 
 def cmd_eval_bag(args) -> int:
-    topics = {role: getattr(args, f"{role}_topic") for role in TOPICS
-              if getattr(args, f"{role}_topic") is not None}
+    topics = {role: getattr(args, f'{role}_topic') for role in TOPICS
+              if getattr(args, f'{role}_topic') is not None}
     metrics = evaluate_bag(args.bag, topics).metrics()
     if args.json:
-        print(json.dumps({"bag": str(args.bag), **metrics}))
-    elif metrics["n"] == 0:
-        print(f"{args.bag}: no answered instruction with a recorded truth "
+        print(json.dumps({'bag': str(args.bag), **metrics}))
+    elif metrics['n'] == 0:
+        print(f'{args.bag}: no answered instruction with a recorded truth '
               f"({metrics['unanswered']} unanswered)")
     else:
         line = (f"{args.bag}: {metrics['n']} answered instructions, MD {metrics['md']:.2f}, "
                 f"HIT {metrics['hit']:.3f}")
-        if "pq" in metrics:
+        if 'pq' in metrics:
             line += f", PQ {metrics['pq']:.3f}, MSE {metrics['mse']:.3f}"
         print(line + f" ({metrics['unanswered']} unanswered)")
     return 0
 
 
 def register_cli(sub) -> None:
-    p = sub.add_parser("eval-bag", help="score the goals recorded in a rosbag2 bag (MD, PQ, MSE)")
-    p.add_argument("bag", help="bag directory (or its .mcap file)")
+    p = sub.add_parser('eval-bag', help='score the goals recorded in a rosbag2 bag (MD, PQ, MSE)')
+    p.add_argument('bag', help='bag directory (or its .mcap file)')
     for role, name in TOPICS.items():
         p.add_argument(f"--{role.replace('_', '-')}-topic", default=None,
-                       help=f"{MSGTYPES[role]} topic (default: {name!r} in any namespace)")
-    p.add_argument("--json", action="store_true", help="print exactly one JSON object")
+                       help=f'{MSGTYPES[role]} topic (default: {name!r} in any namespace)')
+    p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.set_defaults(func=cmd_eval_bag)

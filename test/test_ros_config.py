@@ -32,10 +32,10 @@ def node_parameters(node_module: str):
     return module.NODE_NAME, module.PARAMETERS
 
 
-@pytest.mark.parametrize("name, table", [("entities_puddleworld.yaml", PUDDLEWORLD),
-                                         ("entities_isi.yaml", ISI)])
+@pytest.mark.parametrize('name, table', [('entities_puddleworld.yaml', PUDDLEWORLD),
+                                         ('entities_isi.yaml', ISI)])
 def test_entity_tables_are_the_core_tables(name, table):
-    assert EntityTable.from_yaml(REPO / "config" / name) == table
+    assert EntityTable.from_yaml(REPO / 'config' / name) == table
 
 
 @pytest.mark.parametrize('file, node_module', [('grounder.yaml', 'grounder_node'),
@@ -64,13 +64,13 @@ def test_grounder_defaults_find_their_files():
 
 
 def test_find_config_by_path_and_by_name(tmp_path):
-    own = tmp_path / "mine.yaml"
-    own.write_text("x: 1\n")
+    own = tmp_path / 'mine.yaml'
+    own.write_text('x: 1\n')
     assert find_config(own) == own
-    assert find_config("grounder.yaml").read_text() == (REPO / "config" /
-                                                        "grounder.yaml").read_text()
-    with pytest.raises(FileNotFoundError, match="no_such.yaml: config file not found"):
-        find_config("no_such.yaml")
+    assert find_config('grounder.yaml').read_text() == (REPO / 'config' /
+                                                        'grounder.yaml').read_text()
+    with pytest.raises(FileNotFoundError, match='no_such.yaml: config file not found'):
+        find_config('no_such.yaml')
 
 
 # --- launch/*.launch.py, read as source: `launch` is not on PyPI, so they cannot be imported

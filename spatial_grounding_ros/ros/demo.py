@@ -35,18 +35,18 @@ from .gridworld_node import LATCHED, STEPS
 from .node_support import stop_processes
 
 RECORDED = {  # topic -> type; the first six are latched
-    "entity_map": "nav_msgs/msg/OccupancyGrid", "instruction": "std_msgs/msg/String",
-    "true_goal": "geometry_msgs/msg/PoseStamped",
-    "true_value_map": "std_msgs/msg/Float32MultiArray",
-    "true_reward_map": "std_msgs/msg/Float32MultiArray",
-    "value_map_raw": "std_msgs/msg/Float32MultiArray",
-    "value_map": "nav_msgs/msg/OccupancyGrid", "relation_map": "nav_msgs/msg/OccupancyGrid",
-    "goal_pose": "geometry_msgs/msg/PoseStamped", "agent_pose": "geometry_msgs/msg/PoseStamped",
-    "reward": "std_msgs/msg/Float32", "terminated": "std_msgs/msg/Bool",
-    "diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    'entity_map': 'nav_msgs/msg/OccupancyGrid', 'instruction': 'std_msgs/msg/String',
+    'true_goal': 'geometry_msgs/msg/PoseStamped',
+    'true_value_map': 'std_msgs/msg/Float32MultiArray',
+    'true_reward_map': 'std_msgs/msg/Float32MultiArray',
+    'value_map_raw': 'std_msgs/msg/Float32MultiArray',
+    'value_map': 'nav_msgs/msg/OccupancyGrid', 'relation_map': 'nav_msgs/msg/OccupancyGrid',
+    'goal_pose': 'geometry_msgs/msg/PoseStamped', 'agent_pose': 'geometry_msgs/msg/PoseStamped',
+    'reward': 'std_msgs/msg/Float32', 'terminated': 'std_msgs/msg/Bool',
+    'diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
 }
-LATCHED_TOPICS = {"entity_map", "instruction", "true_goal", "true_value_map", "true_reward_map",
-                  "value_map_raw", "value_map", "relation_map"}
+LATCHED_TOPICS = {'entity_map', 'instruction', 'true_goal', 'true_value_map', 'true_reward_map',
+                  'value_map_raw', 'value_map', 'relation_map'}
 
 
 def executable(name: str) -> list[str]:
@@ -54,15 +54,15 @@ def executable(name: str) -> list[str]:
     script = Path(sys.executable).parent / name
     if script.is_file():
         return [str(script)]
-    module = {"gridworld": "gridworld_node", "grounder": "grounder_node"}[name]
-    return [sys.executable, "-m", f"spatial_grounding_ros.ros.{module}"]
+    module = {'gridworld': 'gridworld_node', 'grounder': 'grounder_node'}[name]
+    return [sys.executable, '-m', f'spatial_grounding_ros.ros.{module}']
 
 
 class DemoWatcher(Node):
     """Follows one episode at a time: the goal the grounder sent, the agent's moves."""
 
     def __init__(self, namespace: str):
-        super().__init__("demo_watcher", namespace=namespace)
+        super().__init__('demo_watcher', namespace=namespace)
         self.goals: list[PoseStamped] = []
         self.poses: list[PoseStamped] = []
         self.rewards: list[float] = []
@@ -72,23 +72,23 @@ class DemoWatcher(Node):
         self.values: Float32MultiArray | None = None
         self.relation: OccupancyGrid | None = None
         self.true_goal: PoseStamped | None = None
-        self.instruction = ""
-        self.create_subscription(PoseStamped, "goal_pose", self.goals.append, 10)
-        self.create_subscription(PoseStamped, "agent_pose", self.poses.append, STEPS)
-        self.create_subscription(Float32, "reward", lambda m: self.rewards.append(m.data), STEPS)
-        self.create_subscription(Bool, "terminated", self.on_terminated, STEPS)
-        self.create_subscription(OccupancyGrid, "entity_map",
-                                 lambda m: setattr(self, "map_msg", m), LATCHED)
-        self.create_subscription(Float32MultiArray, "value_map_raw",
-                                 lambda m: setattr(self, "values", m), LATCHED)
-        self.create_subscription(OccupancyGrid, "relation_map",
-                                 lambda m: setattr(self, "relation", m), LATCHED)
-        self.create_subscription(String, "instruction",
-                                 lambda m: setattr(self, "instruction", m.data), LATCHED)
-        self.create_subscription(PoseStamped, "true_goal",
-                                 lambda m: setattr(self, "true_goal", m), LATCHED)
-        self.next_client = self.create_client(Trigger, "next_episode")
-        self.reset_client = self.create_client(Trigger, "reset_episode")
+        self.instruction = ''
+        self.create_subscription(PoseStamped, 'goal_pose', self.goals.append, 10)
+        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STEPS)
+        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STEPS)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
+        self.create_subscription(OccupancyGrid, 'entity_map',
+                                 lambda m: setattr(self, 'map_msg', m), LATCHED)
+        self.create_subscription(Float32MultiArray, 'value_map_raw',
+                                 lambda m: setattr(self, 'values', m), LATCHED)
+        self.create_subscription(OccupancyGrid, 'relation_map',
+                                 lambda m: setattr(self, 'relation', m), LATCHED)
+        self.create_subscription(String, 'instruction',
+                                 lambda m: setattr(self, 'instruction', m.data), LATCHED)
+        self.create_subscription(PoseStamped, 'true_goal',
+                                 lambda m: setattr(self, 'true_goal', m), LATCHED)
+        self.next_client = self.create_client(Trigger, 'next_episode')
+        self.reset_client = self.create_client(Trigger, 'reset_episode')
 
     def on_terminated(self, msg: Bool) -> None:
         self.terminated_msgs += 1
@@ -121,24 +121,24 @@ def spin_until(executor, condition, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            raise TimeoutError(f"demo: no {what} within {timeout:g} s")
+            raise TimeoutError(f'demo: no {what} within {timeout:g} s')
         executor.spin_once(timeout_sec=0.02)
 
 
-def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = "../shared/data",
+def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = '../shared/data',
              step_period: float = 0.05, step_limit: int = 40) -> dict:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    bag_path = out / "demo_bag"
+    bag_path = out / 'demo_bag'
     if bag_path.exists():
         shutil.rmtree(bag_path)
-    use_data = (Path(data_dir) / "puddleworld" / "local.p").is_file()
-    source = ["-p", "source:=pw-local", "-p", "split:=test", "-p", f"data_dir:={data_dir}"] \
-        if use_data else ["-p", "source:=generator", "-p", f"episodes:={episodes}"]
-    namespace = f"/demo_{os.getpid()}"
-    common = ["--ros-args", "-r", f"__ns:={namespace}", "-r", "/diagnostics:=diagnostics"]
-    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": os.environ.get(
-        "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
+    use_data = (Path(data_dir) / 'puddleworld' / 'local.p').is_file()
+    source = ['-p', 'source:=pw-local', '-p', 'split:=test', '-p', f'data_dir:={data_dir}'] \
+        if use_data else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
+    namespace = f'/demo_{os.getpid()}'
+    common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', '/diagnostics:=diagnostics']
+    env = {**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
+        'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')}
     rclpy.init()
     watcher = recording = None
     processes = []
@@ -150,27 +150,27 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
         executor.add_node(watcher)
         recording = RecordingThread(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
         processes = [
-            subprocess.Popen(executable("grounder") + common,
+            subprocess.Popen(executable('grounder') + common,
                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
             # the first episode waits for the instruction's three subscribers: the grounder,
             # the recorder and the watcher
-            subprocess.Popen(executable("gridworld") + common + source + [
-                "-p", f"seed:={seed}", "-p", "order:=sequential",
-                "-p", f"step_limit:={step_limit}", "-p", f"step_period:={step_period}",
-                "-p", "start_after_subscribers:=3"],
+            subprocess.Popen(executable('gridworld') + common + source + [
+                '-p', f'seed:={seed}', '-p', 'order:=sequential',
+                '-p', f'step_limit:={step_limit}', '-p', f'step_period:={step_period}',
+                '-p', 'start_after_subscribers:=3'],
                 env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
         ]
         print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'})"
-              f" and grounder running in namespace {namespace}; recording to {bag_path}",
+              f' and grounder running in namespace {namespace}; recording to {bag_path}',
               flush=True)
         for k in range(episodes):
             if k > 0:
                 watcher.clear()
                 future = watcher.next_client.call_async(Trigger.Request())
-                spin_until(executor, future.done, 30, "next episode")
+                spin_until(executor, future.done, 30, 'next episode')
             # the first episode also waits for both processes to start and the model to load
             spin_until(executor, lambda: watcher.goals and watcher.values is not None
-                       and watcher.relation is not None, 120 if k == 0 else 30, "grounding")
+                       and watcher.relation is not None, 120 if k == 0 else 30, 'grounding')
             goal = watcher.cell(watcher.goals[0])
 
             def settled() -> bool:
@@ -178,7 +178,7 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
                 return watcher.moves_complete() and (
                     watcher.terminated or at == goal or len(watcher.rewards) >= step_limit)
 
-            spin_until(executor, settled, step_limit * step_period + 10, "agent arrival")
+            spin_until(executor, settled, step_limit * step_period + 10, 'agent arrival')
             for topic, n in watcher.seen().items():
                 recorded_total[topic] = recorded_total.get(topic, 0) + n
             path = [watcher.cell(p) for p in watcher.poses]
@@ -188,23 +188,23 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10 ** 6)
             values = convert.float32_multiarray_to_value_map(watcher.values)
             relation = convert.occupancy_grid_to_grid(watcher.relation, 10 ** 6).astype(float)
-            png = plot_grounding(out / f"episode_{k}.png", grid, PUDDLEWORLD, values, relation,
+            png = plot_grounding(out / f'episode_{k}.png', grid, PUDDLEWORLD, values, relation,
                                  instruction, goal, truth, path_cells=path)
             reward = float(sum(watcher.rewards))
-            outcome = ("reached the true goal" if watcher.terminated else
-                       "stopped at its goal_pose, not the true goal" if path[-1] == goal else
-                       "did not get to its goal_pose")
-            line = (f"[{k}] {instruction!r}: goal {goal}, true {truth}, "
-                    f"{outcome}, "
-                    f"Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}")
+            outcome = ('reached the true goal' if watcher.terminated else
+                       'stopped at its goal_pose, not the true goal' if path[-1] == goal else
+                       'did not get to its goal_pose')
+            line = (f'[{k}] {instruction!r}: goal {goal}, true {truth}, '
+                    f'{outcome}, '
+                    f'Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}')
             print(line, flush=True)
-            lines.append({"goal": goal, "truth": truth, "end": path[-1],
-                          "reached": watcher.terminated, "md": error, "reward": reward})
+            lines.append({'goal': goal, 'truth': truth, 'end': path[-1],
+                          'reached': watcher.terminated, 'md': error, 'reward': reward})
         # the recorder hears what the watcher heard; wait until the bag holds it all
-        full = {t: f"{namespace}/{t}" for t in recorded_total}
+        full = {t: f'{namespace}/{t}' for t in recorded_total}
         spin_until(executor, lambda: all(recording.counts.get(full[t], 0) >= n
                                          for t, n in recorded_total.items()), 30,
-                   "recording of the last messages")
+                   'recording of the last messages')
     finally:
         recorded = {}
         if recording is not None:
@@ -215,16 +215,16 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             watcher.destroy_node()
         rclpy.try_shutdown()
         stop_processes(*processes)
-    summary = {"episodes": len(lines), "reached": sum(l["reached"] for l in lines),
-               "md": float(np.mean([l["md"] for l in lines])) if lines else None,
-               "reward": float(np.mean([l["reward"] for l in lines])) if lines else None,
-               "bag": str(bag_path), "from_bag": evaluate_bag(bag_path).metrics(),
-               "recorded": recorded, "per_episode": lines}
-    bag = summary["from_bag"]
+    summary = {'episodes': len(lines), 'reached': sum(l['reached'] for l in lines),
+               'md': float(np.mean([l['md'] for l in lines])) if lines else None,
+               'reward': float(np.mean([l['reward'] for l in lines])) if lines else None,
+               'bag': str(bag_path), 'from_bag': evaluate_bag(bag_path).metrics(),
+               'recorded': recorded, 'per_episode': lines}
+    bag = summary['from_bag']
     print(f"summary: {summary['reached']}/{summary['episodes']} episodes reached the goal, "
           f"mean Manhattan error {summary['md']:.2f}, mean reward {summary['reward']:.2f}; "
           f"eval-bag on {bag_path}: n {bag['n']}, MD {bag['md']:.2f}"
-          + (f", PQ {bag['pq']:.3f}, MSE {bag['mse']:.3f}" if "pq" in bag else ""))
+          + (f", PQ {bag['pq']:.3f}, MSE {bag['mse']:.3f}" if 'pq' in bag else ''))
     return summary
 
 
@@ -236,10 +236,11 @@ def cmd_closed_loop_demo(args) -> int:
 def register_cli(sub) -> None:
     from ..cli import DEFAULT_DATA
 
-    d = sub.add_parser("demo", help="gridworld + grounder nodes in a closed loop, recorded to a bag")
-    d.add_argument("--episodes", type=int, default=5)
-    d.add_argument("--seed", type=int, default=7)
-    d.add_argument("--data", default=DEFAULT_DATA,
-                   help="PuddleWorld local test maps are used when this folder holds them")
-    d.add_argument("--out", default="demo_out")
+    d = sub.add_parser('demo', help='gridworld + grounder nodes in a closed loop, recorded '
+                       'to a bag')
+    d.add_argument('--episodes', type=int, default=5)
+    d.add_argument('--seed', type=int, default=7)
+    d.add_argument('--data', default=DEFAULT_DATA,
+                   help='PuddleWorld local test maps are used when this folder holds them')
+    d.add_argument('--out', default='demo_out')
     d.set_defaults(func=cmd_closed_loop_demo)

@@ -40,9 +40,9 @@ GENERATED = ('generator', 'generator-local', 'generator-global')
 # Everything here shapes the episodes or the timer made at start-up: read-only.
 PARAMETERS = (
     Param('source', 'generator',
-          "where episodes come from: generator (mixed local/global), generator-local, "
+          'where episodes come from: generator (mixed local/global), generator-local, '
           "generator-global (the project's own worlds, no download), or a data-set task read "
-          "from data_dir (its split)", read_only=True, choices=GENERATED + tuple(TASKS)),
+          'from data_dir (its split)', read_only=True, choices=GENERATED + tuple(TASKS)),
     Param('split', 'test', 'data-set split of a task source', read_only=True,
           choices=tuple(SPLITS)),
     Param('data_dir', '../shared/data', 'folder of the data sets (task sources only)',
@@ -148,17 +148,17 @@ class GridWorldNode(Node):
             self.env.data.rewards[i]))
         self.instruction_pub.publish(String(data=self.env.instruction))
         self.publish_pose()
-        self.get_logger().info(f"episode {i}: {self.env.instruction!r}, agent at "
-                               f"{self.env.agent}")
+        self.get_logger().info(f'episode {i}: {self.env.instruction!r}, agent at '
+                               f'{self.env.agent}')
 
     def on_reset(self, request, response):
         self.start_episode(self.env.example if self.env.example >= 0 else None)
-        response.success, response.message = True, f"episode {self.env.example} restarted"
+        response.success, response.message = True, f'episode {self.env.example} restarted'
         return response
 
     def on_next(self, request, response):
         self.start_episode(None)
-        response.success, response.message = True, f"episode {self.env.example} started"
+        response.success, response.message = True, f'episode {self.env.example} started'
         return response
 
     def move(self, action: int) -> None:
@@ -168,21 +168,21 @@ class GridWorldNode(Node):
         self.terminated_pub.publish(Bool(data=terminated))
         if terminated or truncated:
             self.path_policy = None
-            self.get_logger().info(f"episode {self.env.example} "
+            self.get_logger().info(f'episode {self.env.example} '
                                    f"{'reached the goal' if terminated else 'hit the step limit'}"
-                                   f" after {self.env.steps} moves, return "
-                                   f"{self.env.total_reward:g}")
+                                   f' after {self.env.steps} moves, return '
+                                   f'{self.env.total_reward:g}')
 
     def on_action(self, msg: Int32) -> None:
         if not 0 <= msg.data < len(world.ACTIONS):
-            self.report("action", DiagnosticStatus.WARN,
-                        f"action {msg.data} ignored: use 0..{len(world.ACTIONS) - 1} "
+            self.report('action', DiagnosticStatus.WARN,
+                        f'action {msg.data} ignored: use 0..{len(world.ACTIONS) - 1} '
                         f"({', '.join(world.ACTION_NAMES)})")
             return
         if self.env.done:
-            self.report("action", DiagnosticStatus.WARN,
-                        f"action {msg.data} ignored: the episode is over (call next_episode "
-                        "or reset_episode)")
+            self.report('action', DiagnosticStatus.WARN,
+                        f'action {msg.data} ignored: the episode is over (call next_episode '
+                        'or reset_episode)')
             return
         self.path_policy = None  # an explicit action cancels a goal walk
         self.move(msg.data)
@@ -190,24 +190,24 @@ class GridWorldNode(Node):
     def on_goal_pose(self, msg: PoseStamped) -> None:
         frame = msg.header.frame_id
         if frame and frame != self.frame_id:
-            self.report("goal_pose", DiagnosticStatus.WARN,
-                        f"goal_pose ignored: frame {frame!r} is not the map frame "
-                        f"{self.frame_id!r}")
+            self.report('goal_pose', DiagnosticStatus.WARN,
+                        f'goal_pose ignored: frame {frame!r} is not the map frame '
+                        f'{self.frame_id!r}')
             return
         p = msg.pose.position
         cell = convert.point_to_cell(p.x, p.y, self.info)
         if cell is None:
-            self.report("goal_pose", DiagnosticStatus.WARN,
-                        f"goal_pose ignored: ({p.x:g}, {p.y:g}) is outside the "
-                        f"{self.info.width}x{self.info.height} map")
+            self.report('goal_pose', DiagnosticStatus.WARN,
+                        f'goal_pose ignored: ({p.x:g}, {p.y:g}) is outside the '
+                        f'{self.info.width}x{self.info.height} map')
             return
         if self.env.done:
-            self.report("goal_pose", DiagnosticStatus.WARN,
-                        "goal_pose ignored: the episode is over (call next_episode)")
+            self.report('goal_pose', DiagnosticStatus.WARN,
+                        'goal_pose ignored: the episode is over (call next_episode)')
             return
         self.path_policy = world.greedy_policy(self.path_values(cell))
         self.path_goal = cell
-        self.report("goal_pose", DiagnosticStatus.OK, f"walking from {self.env.agent} to {cell}")
+        self.report('goal_pose', DiagnosticStatus.OK, f'walking from {self.env.agent} to {cell}')
 
     def path_values(self, cell: tuple[int, int]) -> np.ndarray:
         """Minus the cost to reach `cell`: 1 per move, 1.5 into an obstacle (puddle), so the
@@ -231,8 +231,8 @@ class GridWorldNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return spin(GridWorldNode, "gridworld", args)
+    return spin(GridWorldNode, 'gridworld', args)
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     sys.exit(main())
