@@ -117,9 +117,16 @@ class DemoWatcher(Node):
         return convert.point_to_cell(pose.pose.position.x, pose.pose.position.y, self.map_msg.info)
 
 
-def spin_until(executor, condition, timeout: float, what: str) -> None:
+def spin_until(executor, condition, timeout: float, what: str, processes=()) -> None:
+    """Spin until `condition()`; TimeoutError after `timeout`, RuntimeError as soon as one of
+    `processes` ({log path: Popen}) has exited, with the last line of its log."""
     deadline = time.monotonic() + timeout
     while not condition():
+        for log, process in dict(processes).items():
+            if process.poll() is not None:
+                last = (log.read_text().strip().splitlines() or ['(no output)'])[-1]
+                raise RuntimeError(f'demo: {log.stem} exited ({process.returncode}) while '
+                                   f'waiting for {what}: {last} (see {log})')
         if time.monotonic() > deadline:
             raise TimeoutError(f'demo: no {what} within {timeout:g} s')
         executor.spin_once(timeout_sec=0.02)
@@ -141,7 +148,7 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
         'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')}
     rclpy.init()
     watcher = recording = None
-    processes = []
+    processes, logs = [], {}
     executor = SingleThreadedExecutor()
     lines = []
     recorded_total = {}  # topic -> messages the watcher saw, which the bag must hold too
@@ -149,17 +156,20 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
         watcher = DemoWatcher(namespace)
         executor.add_node(watcher)
         recording = RecordingThread(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
+        logs = {name: open(out / f'{name}.log', 'w') for name in ('grounder', 'gridworld')}
         processes = [
-            subprocess.Popen(executable('grounder') + common,
-                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+            subprocess.Popen(executable('grounder') + common, env=env,
+                             stdout=logs['grounder'], stderr=subprocess.STDOUT),
             # the first episode waits for the instruction's three subscribers: the grounder,
             # the recorder and the watcher
             subprocess.Popen(executable('gridworld') + common + source + [
                 '-p', f'seed:={seed}', '-p', 'order:=sequential',
                 '-p', f'step_limit:={step_limit}', '-p', f'step_period:={step_period}',
                 '-p', 'start_after_subscribers:=3'],
-                env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+                env=env, stdout=logs['gridworld'], stderr=subprocess.STDOUT),
         ]
+        running = {Path(logs[name].name): p for name, p in zip(('grounder', 'gridworld'),
+                                                               processes)}
         print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'})"
               f' and grounder running in namespace {namespace}; recording to {bag_path}',
               flush=True)
@@ -167,10 +177,14 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             if k > 0:
                 watcher.clear()
                 future = watcher.next_client.call_async(Trigger.Request())
-                spin_until(executor, future.done, 30, 'next episode')
-            # the first episode also waits for both processes to start and the model to load
+                spin_until(executor, future.done, 60, 'next episode', running)
+            else:
+                # both processes start (torch loads: slow on a busy machine), and the gridworld
+                # publishes its first episode once the three subscribers are there
+                spin_until(executor, lambda: watcher.count_subscribers(
+                    f'{namespace}/instruction') >= 3, 600, 'grounder subscription', running)
             spin_until(executor, lambda: watcher.goals and watcher.values is not None
-                       and watcher.relation is not None, 120 if k == 0 else 30, 'grounding')
+                       and watcher.relation is not None, 60, 'grounding', running)
             goal = watcher.cell(watcher.goals[0])
 
             def settled() -> bool:
@@ -178,7 +192,8 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
                 return watcher.moves_complete() and (
                     watcher.terminated or at == goal or len(watcher.rewards) >= step_limit)
 
-            spin_until(executor, settled, step_limit * step_period + 10, 'agent arrival')
+            spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival',
+                       running)
             for topic, n in watcher.seen().items():
                 recorded_total[topic] = recorded_total.get(topic, 0) + n
             path = [watcher.cell(p) for p in watcher.poses]
@@ -215,6 +230,8 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             watcher.destroy_node()
         rclpy.try_shutdown()
         stop_processes(*processes)
+        for log in logs.values():
+            log.close()
     summary = {'episodes': len(lines), 'reached': sum(l['reached'] for l in lines),
                'md': float(np.mean([l['md'] for l in lines])) if lines else None,
                'reward': float(np.mean([l['reward'] for l in lines])) if lines else None,
