@@ -1,7 +1,13 @@
-"""Start the grounder node with its parameters file:
+"""Start the grounder node with its parameters file.
 
     ros2 launch spatial_grounding_ros grounder.launch.py
-    ros2 launch spatial_grounding_ros grounder.launch.py params_file:=/path/to/my.yaml namespace:=robot1
+    ros2 launch spatial_grounding_ros grounder.launch.py namespace:=robot1 use_sim_time:=true
+    ros2 launch spatial_grounding_ros grounder.launch.py params_file:=/path/to/my.yaml \
+        autostart:=false log_level:=debug
+
+The shipped params file is keyed /**/spatial_grounder, so it applies in any namespace as it
+is (no rewriting). With autostart:=false the node waits, unconfigured, for a lifecycle
+manager (Nav2's lifecycle_manager, or `ros2 lifecycle set`).
 """
 import os
 
@@ -11,19 +17,28 @@ from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-PACKAGE = "spatial_grounding_ros"
+PACKAGE = 'spatial_grounding_ros'
 
 
 def generate_launch_description():
-    default_params = os.path.join(get_package_share_directory(PACKAGE), "config",
-                                  "grounder.yaml")
+    share = get_package_share_directory(PACKAGE)
     return LaunchDescription([
-        DeclareLaunchArgument("params_file", default_value=default_params,
-                              description="ROS parameters file of the grounder node"),
-        DeclareLaunchArgument("namespace", default_value="",
-                              description="namespace of the node and its relative topics"),
-        Node(package=PACKAGE, executable="grounder", name="spatial_grounder",
-             namespace=LaunchConfiguration("namespace"),
-             parameters=[LaunchConfiguration("params_file")], output="screen",
-             emulate_tty=True),
+        DeclareLaunchArgument('namespace', default_value='',
+                              description='namespace of the node and its relative topics'),
+        DeclareLaunchArgument('params_file',
+                              default_value=os.path.join(share, 'config', 'grounder.yaml'),
+                              description='ROS parameters file of the grounder node'),
+        DeclareLaunchArgument('use_sim_time', default_value='false',
+                              description='use the /clock topic (simulation time)'),
+        DeclareLaunchArgument('autostart', default_value='true',
+                              description='configure and activate the node at start-up'),
+        DeclareLaunchArgument('log_level', default_value='info',
+                              description='log level: debug, info, warn, error or fatal'),
+        Node(package=PACKAGE, executable='grounder', name='spatial_grounder',
+             namespace=LaunchConfiguration('namespace'),
+             parameters=[LaunchConfiguration('params_file'),
+                         {'use_sim_time': LaunchConfiguration('use_sim_time'),
+                          'autostart': LaunchConfiguration('autostart')}],
+             arguments=['--ros-args', '--log-level', LaunchConfiguration('log_level')],
+             output='screen', emulate_tty=True),
     ])

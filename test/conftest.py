@@ -7,17 +7,17 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-DATA = Path(os.environ.get("SPATIAL_GROUNDING_DATA", REPO.parent / "shared" / "data"))
+DATA = Path(os.environ.get('SPATIAL_GROUNDING_DATA', REPO.parent / 'shared' / 'data'))
 
 # Real DDS on loopback only, in a domain of this run's own, so parallel runs never meet.
-os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-os.environ.setdefault("ROS_DOMAIN_ID", str(random.Random(os.getpid()).randint(1, 100)))
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+os.environ.setdefault('ROS_DOMAIN_ID', str(random.Random(os.getpid()).randint(1, 100)))
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope='session')
 def data_dir() -> Path:
-    if not (DATA / "puddleworld" / "local.p").is_file():
-        pytest.skip(f"real data sets not found at {DATA} (set SPATIAL_GROUNDING_DATA)")
+    if not (DATA / 'puddleworld' / 'local.p').is_file():
+        pytest.skip(f'real data sets not found at {DATA} (set SPATIAL_GROUNDING_DATA)')
     return DATA
 
 
@@ -74,16 +74,16 @@ class RosGraph:
 @pytest.fixture
 def ros_context():
     """A RosGraph for one test (see RosGraph)."""
-    pytest.importorskip("rclpy", reason="rclpy is not installed")
+    pytest.importorskip('rclpy', reason='rclpy is not installed')
     graph = RosGraph()
     yield graph
     graph.close()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def ros_module_context():
     """A RosGraph shared by a test module, so its nodes start once."""
-    pytest.importorskip("rclpy", reason="rclpy is not installed")
+    pytest.importorskip('rclpy', reason='rclpy is not installed')
     graph = RosGraph()
     yield graph
     graph.close()

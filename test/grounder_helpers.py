@@ -18,7 +18,7 @@ from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.models import ModelConfig, build_model
 from spatial_grounding_ros.text import Vocabulary
 
-MODEL = "t-rnet-attn"
+MODEL = 't-rnet-attn'
 
 
 def unique_namespace(base: str) -> str:
@@ -26,11 +26,11 @@ def unique_namespace(base: str) -> str:
     one of 100, so two runs on one host can share a domain; in their own namespaces they
     cannot hear each other's maps, instructions or goals (or diagnostics, which the probe
     filters by the node's full name)."""
-    return f"/{base}_{os.getpid()}_{secrets.token_hex(3)}"
+    return f'/{base}_{os.getpid()}_{secrets.token_hex(3)}'
 
 
 def generator_vocabulary() -> Vocabulary:
-    return Vocabulary.build(generate(300, seed=1, mode="mixed").instructions)
+    return Vocabulary.build(generate(300, seed=1, mode='mixed').instructions)
 
 
 def random_checkpoint(path: Path) -> Path:
@@ -40,7 +40,7 @@ def random_checkpoint(path: Path) -> Path:
     cfg = ModelConfig(n_entities=len(PUDDLEWORLD), vocab_size=len(vocab))
     torch.manual_seed(0)
     return save_checkpoint(path, MODEL, build_model(MODEL, cfg), cfg, vocab, PUDDLEWORLD,
-                           task="test: random weights")
+                           task='test: random weights')
 
 
 def north_east_checkpoint(path: Path) -> Path:
@@ -56,7 +56,7 @@ def north_east_checkpoint(path: Path) -> Path:
         model.decoder.bias[-3:] = torch.tensor([0.1, -1.0, 0.0])  # Z2 = b1*G1 + b2*G2 + b3*J
         model.head.convs[0].weight[0, 1, 1, 1] = 1.0              # value = Z2 (centre tap)
     return save_checkpoint(path, MODEL, model, cfg, vocab, PUDDLEWORLD,
-                           task="test: hand-set north-east model")
+                           task='test: hand-set north-east model')
 
 
 def make_probe(context, namespace: str, grounder_name: str):
@@ -72,26 +72,26 @@ def make_probe(context, namespace: str, grounder_name: str):
     from spatial_grounding_ros.ros import convert
     from spatial_grounding_ros.ros.grounder_node import LATCHED
 
-    logger_name = grounder_name.strip("/").replace("/", ".")  # how /rosout names its lines
+    logger_name = grounder_name.strip('/').replace('/', '.')  # how /rosout names its lines
 
     class GrounderProbe(Node):
-        RECORDS = ("goals", "value_maps", "raw_maps", "relation_maps", "diagnostics",
-                   "warnings")
+        RECORDS = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics',
+                   'warnings')
 
         def __init__(self):
-            super().__init__("grounder_probe", namespace=namespace, context=context)
+            super().__init__('grounder_probe', namespace=namespace, context=context)
             self.goals, self.value_maps, self.raw_maps, self.relation_maps = [], [], [], []
             self.diagnostics, self.warnings = [], []
             self.stamps = itertools.count(1)
             sub = self.create_subscription
-            sub(PoseStamped, "goal_pose", self.goals.append, 10)
-            sub(OccupancyGrid, "value_map", self.value_maps.append, LATCHED)
-            sub(Float32MultiArray, "value_map_raw", self.raw_maps.append, LATCHED)
-            sub(OccupancyGrid, "relation_map", self.relation_maps.append, LATCHED)
-            sub(DiagnosticArray, "/diagnostics", self.on_diagnostics, 100)
-            sub(Log, "/rosout", self.on_log, 100)
-            self.map_pub = self.create_publisher(OccupancyGrid, "entity_map", LATCHED)
-            self.instruction_pub = self.create_publisher(String, "instruction", 10)
+            sub(PoseStamped, 'goal_pose', self.goals.append, 10)
+            sub(OccupancyGrid, 'value_map', self.value_maps.append, LATCHED)
+            sub(Float32MultiArray, 'value_map_raw', self.raw_maps.append, LATCHED)
+            sub(OccupancyGrid, 'relation_map', self.relation_maps.append, LATCHED)
+            sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 100)
+            sub(Log, '/rosout', self.on_log, 100)
+            self.map_pub = self.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
+            self.instruction_pub = self.create_publisher(String, 'instruction', 10)
 
         def counts(self) -> dict:
             """How many of each output so far; pass to new() to get what came after."""
@@ -101,7 +101,7 @@ def make_probe(context, namespace: str, grounder_name: str):
             return getattr(self, record)[counts[record]:]
 
         def on_diagnostics(self, msg):
-            self.diagnostics += [s for s in msg.status if s.name.startswith(grounder_name + ":")]
+            self.diagnostics += [s for s in msg.status if s.name.startswith(grounder_name + ':')]
 
         def on_log(self, msg):
             # /rosout is global: keep the lines of this namespace's grounder only
@@ -111,18 +111,18 @@ def make_probe(context, namespace: str, grounder_name: str):
         def holds(self, message) -> bool:
             """Whether the grounder said (its OK `entity_map` diagnostic) that it holds the map
             `message`, told apart from earlier maps by its stamp."""
-            stamp = {"stamp_sec": str(message.header.stamp.sec),
-                     "stamp_nanosec": str(message.header.stamp.nanosec)}
-            return any(s.name == f"{grounder_name}: entity_map" and s.level == DiagnosticStatus.OK
+            stamp = {'stamp_sec': str(message.header.stamp.sec),
+                     'stamp_nanosec': str(message.header.stamp.nanosec)}
+            return any(s.name == f'{grounder_name}: entity_map' and s.level == DiagnosticStatus.OK
                        and stamp.items() <= {v.key: v.value for v in s.values}.items()
                        for s in self.diagnostics)
 
         def connected(self) -> bool:
             return (self.instruction_pub.get_subscription_count() > 0
                     and self.map_pub.get_subscription_count() > 0
-                    and self.count_publishers(f"{namespace}/goal_pose") > 0)
+                    and self.count_publishers(f'{namespace}/goal_pose') > 0)
 
-        def publish_map(self, grid=None, info=None, frame_id="map", message=None):
+        def publish_map(self, grid=None, info=None, frame_id='map', message=None):
             """Publish an entity map (a data-set grid, or a ready message); returns it. Each
             map gets a distinct stamp so a test can tell which one the grounder holds."""
             if message is None:

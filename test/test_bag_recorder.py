@@ -1,58 +1,149 @@
-"""The bag recorder over real DDS: latched topics are subscribed transient local (a map
-latched before recording started is in the bag) and marked transient local in the bag's
-metadata, so `ros2 bag play` offers them latched again; other topics are volatile; the bytes
-stored are the CDR the publisher sent."""
+"""The bag recorder over real DDS writes what `ros2 bag record -s mcap` of Jazzy writes.
+
+- Latched topics are subscribed transient local (a map latched before recording started is
+  in the bag); the bytes stored are the CDR the publisher sent.
+- Each topic's offered_qos_profiles are the publishers' QoS as the graph reports them, not
+  the recorder's own subscription QoS; each channel has its topic_type_hash (RIHS01), the
+  metadata says ros_distro: jazzy (read back with the independent `mcap` reader too).
+- log_time is the reception time, even when the recorder's thread is busy when the message
+  arrives, and publish_time the publisher's send time.
+"""
+import threading
+import time
+
 import numpy as np
 import pytest
 import yaml
 
-pytest.importorskip("rclpy", reason="rclpy is not installed")
+pytest.importorskip('rclpy', reason='rclpy is not installed')
+make_reader = pytest.importorskip(
+    'mcap.reader', reason='the mcap reader is not installed (pip install mcap, requirements.txt)'
+).make_reader
 
 from grounder_helpers import unique_namespace  # noqa: E402
 from nav_msgs.msg import OccupancyGrid  # noqa: E402
+from rclpy.duration import Duration  # noqa: E402
 from rclpy.node import Node  # noqa: E402
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
 from std_msgs.msg import Header, String  # noqa: E402
 
-from spatial_grounding_ros.bags import open_bag  # noqa: E402
+from spatial_grounding_ros.bags import open_bag, typestore  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
-from spatial_grounding_ros.ros.bag_recorder import LATCHED_QOS, BagRecorder  # noqa: E402
+from spatial_grounding_ros.ros.bag_recorder import BagRecorder, LATCHED_QOS  # noqa: E402
+
+INFINITE = {'sec': 9223372036, 'nsec': 854775807}  # RMW_DURATION_INFINITE
 
 
-def test_latched_topics_are_recorded_and_marked_transient_local(ros_context, tmp_path):
+def topic_metadata(bag) -> dict:
+    info = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    return info, {t['topic_metadata']['name']: t['topic_metadata']
+                  for t in info['topics_with_message_count']}
+
+
+def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(ros_context,
+                                                                              tmp_path):
     graph = ros_context
-    namespace = unique_namespace("recorder_test")
-    source = graph.add(Node("source", namespace=namespace, context=graph.context))
-    map_pub = source.create_publisher(OccupancyGrid, "entity_map", LATCHED_QOS)
-    text_pub = source.create_publisher(String, "instruction", 10)
-    grid = convert.grid_to_occupancy_grid(np.arange(12).reshape(3, 4), Header(frame_id="map"))
+    namespace = unique_namespace('recorder_test')
+    source = graph.add(Node('source', namespace=namespace, context=graph.context))
+    map_pub = source.create_publisher(OccupancyGrid, 'entity_map', LATCHED_QOS)
+    # latched like the gridworld's instruction, with a deadline: the recorder subscribes
+    # volatile, so only the publisher's own QoS can put transient_local and 5 s in the bag
+    text_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                          deadline=Duration(seconds=5))
+    text_pub = source.create_publisher(String, 'instruction', text_qos)
+    second_text_pub = source.create_publisher(String, 'instruction', 10)  # a 2nd publisher
+    grid = convert.grid_to_occupancy_grid(np.arange(12).reshape(3, 4), Header(frame_id='map'))
     map_pub.publish(grid)  # latched before the recorder exists
-    recorder = graph.add(BagRecorder(tmp_path / "bag", {
-        "entity_map": "nav_msgs/msg/OccupancyGrid", "instruction": "std_msgs/msg/String"},
-        latched={"entity_map"}, namespace=namespace, context=graph.context))
-    assert graph.wait_for(lambda: recorder.counts.get(f"{namespace}/entity_map") == 1)
-    assert graph.wait_for(lambda: text_pub.get_subscription_count() > 0)
-    text_pub.publish(String(data="reach cell on top of star"))
-    assert graph.wait_for(lambda: recorder.counts.get(f"{namespace}/instruction") == 1)
+    recorder = graph.add(BagRecorder(tmp_path / 'bag', {
+        'entity_map': 'nav_msgs/msg/OccupancyGrid', 'instruction': 'std_msgs/msg/String'},
+        latched={'entity_map'}, namespace=namespace, context=graph.context))
+    assert graph.wait_for(lambda: recorder.counts.get(f'{namespace}/entity_map') == 1,
+                          timeout=20)
+    assert graph.wait_for(lambda: text_pub.get_subscription_count() > 0
+                          and second_text_pub.get_subscription_count() > 0, timeout=20)
+    text_pub.publish(String(data='reach cell on top of star'))
+    assert graph.wait_for(lambda: recorder.counts.get(f'{namespace}/instruction') == 1)
     graph.executor.remove_node(recorder)  # nothing arrives while the bag closes
     recorder.close()
 
-    info = yaml.safe_load((tmp_path / "bag" / "metadata.yaml").read_text())
-    info = info["rosbag2_bagfile_information"]
-    assert info["version"] == 9 and info["storage_identifier"] == "mcap"
-    qos = {t["topic_metadata"]["name"]: t["topic_metadata"]["offered_qos_profiles"]
-           for t in info["topics_with_message_count"]}
-    [latched] = qos[f"{namespace}/entity_map"]
-    [stream] = qos[f"{namespace}/instruction"]
-    assert (latched["durability"], latched["reliability"], latched["depth"]) == (
-        "transient_local", "reliable", 1)
-    assert (stream["durability"], stream["reliability"]) == ("volatile", "reliable")
+    info, topics = topic_metadata(tmp_path / 'bag')
+    assert info['version'] == 9 and info['storage_identifier'] == 'mcap'
+    assert info['ros_distro'] == 'jazzy'
+    [latched] = topics[f'{namespace}/entity_map']['offered_qos_profiles']
+    # history and depth are not discovered: ros2 bag record stores 'unknown' and 0 too
+    assert latched == {'history': 'unknown', 'depth': 0, 'reliability': 'reliable',
+                       'durability': 'transient_local', 'deadline': INFINITE,
+                       'lifespan': INFINITE, 'liveliness': 'automatic',
+                       'liveliness_lease_duration': INFINITE,
+                       'avoid_ros_namespace_conventions': False}
+    offered = topics[f'{namespace}/instruction']['offered_qos_profiles']
+    assert sorted((q['durability'], q['deadline']['sec']) for q in offered) == [
+        ('transient_local', 5), ('volatile', INFINITE['sec'])]
+    store = typestore()
+    for name, msgtype in ((f'{namespace}/entity_map', 'nav_msgs/msg/OccupancyGrid'),
+                          (f'{namespace}/instruction', 'std_msgs/msg/String')):
+        advertised = str(source.get_publishers_info_by_topic(name)[0].topic_type_hash)
+        assert advertised.startswith('RIHS01_') and len(advertised) == 7 + 64
+        assert topics[name]['type_description_hash'] == advertised
+        assert advertised == store.hash_rihs01(msgtype)  # the definitions stored are Jazzy's
 
-    reader = open_bag(tmp_path / "bag")
+    # the MCAP file, read with the independent `mcap` library
+    [mcap_file] = (tmp_path / 'bag').glob('*.mcap')
+    with open(mcap_file, 'rb') as stream:
+        reader = make_reader(stream)
+        assert reader.get_header().profile == 'ros2'
+        channels = {c.topic: c for c in reader.get_summary().channels.values()}
+        messages = {c.topic: (m.log_time, m.publish_time, m.data)
+                    for _, c, m in reader.iter_messages()}
+        [metadata] = [m for m in reader.iter_metadata() if m.name == 'rosbag2']
+    for name, meta in topics.items():
+        assert channels[name].metadata['topic_type_hash'] == meta['type_description_hash']
+        assert yaml.safe_load(channels[name].metadata['offered_qos_profiles']) == \
+            meta['offered_qos_profiles']
+    assert yaml.safe_load(metadata.metadata['serialized_metadata'])['ros_distro'] == 'jazzy'
+    assert messages[f'{namespace}/entity_map'][2] == serialize_message(grid)
+    log_time, publish_time, data = messages[f'{namespace}/instruction']
+    assert data == serialize_message(String(data='reach cell on top of star'))
+    assert 0 <= log_time - publish_time < 5e9
+
+    reader = open_bag(tmp_path / 'bag')  # and rosbags reads it back as before
     try:
-        stored = {c.topic: raw for c, _, raw in reader.messages()}
+        assert len(list(reader.messages())) == 2
     finally:
         reader.close()
-    assert stored[f"{namespace}/entity_map"] == serialize_message(grid)
-    assert stored[f"{namespace}/instruction"] == serialize_message(
-        String(data="reach cell on top of star"))
+
+
+def test_log_time_is_reception_not_when_a_busy_thread_gets_to_the_callback(ros_context,
+                                                                           tmp_path):
+    """The recorder's executor thread is kept busy for 1.5 s while a message arrives (as
+    the demo's thread was while drawing a PNG): its log_time is still when it arrived."""
+    graph = ros_context
+    namespace = unique_namespace('recorder_busy_test')
+    source = graph.add(Node('source', namespace=namespace, context=graph.context))
+    pub = source.create_publisher(String, 'agent_pose_like', 10)
+    recorder = graph.add(BagRecorder(tmp_path / 'bag', {'agent_pose_like': 'std_msgs/msg/String'},
+                                     namespace=namespace, context=graph.context))
+    assert graph.wait_for(lambda: pub.get_subscription_count() > 0, timeout=20)
+    busy = threading.Event()
+
+    def block_once():
+        timer.cancel()
+        busy.set()
+        time.sleep(1.5)  # the executor thread (the recorder's too) does nothing else now
+
+    timer = source.create_timer(0.01, block_once)
+    assert busy.wait(timeout=20)
+    sent = time.time_ns()
+    pub.publish(String(data='moved'))
+    assert graph.wait_for(lambda: recorder.counts.get(f'{namespace}/agent_pose_like') == 1)
+    handled = time.time_ns()
+    graph.executor.remove_node(recorder)
+    recorder.close()
+    assert handled - sent > 1.0e9  # the callback did run late
+    [mcap_file] = (tmp_path / 'bag').glob('*.mcap')
+    with open(mcap_file, 'rb') as stream:
+        [(_, _, message)] = list(make_reader(stream).iter_messages())
+    assert 0 <= message.log_time - sent < 0.5e9, (message.log_time - sent) / 1e9
+    assert sent - 0.5e9 < message.publish_time <= message.log_time

@@ -43,114 +43,154 @@ def ros():
 
 
 # a namespace of this run's own: runs that share a ROS_DOMAIN_ID (one of 100) never meet
-NAMESPACE = f"/gw_test_{os.getpid()}_{secrets.token_hex(3)}"
+NAMESPACE = f'/gw_test_{os.getpid()}_{secrets.token_hex(3)}'
 
 
 class Probe(rclpy.node.Node):
     def __init__(self, context):
-        super().__init__("probe", namespace=NAMESPACE, context=context)
-        self.got = {k: [] for k in ("map", "instruction", "pose", "reward", "terminated",
-                                    "goal", "values", "diag")}
+        super().__init__('probe', namespace=NAMESPACE, context=context)
+        self.got = {k: [] for k in ('map', 'instruction', 'pose', 'reward', 'terminated',
+                                    'goal', 'values', 'diag')}
         sub = self.create_subscription
-        sub(OccupancyGrid, "entity_map", self.got["map"].append, LATCHED)
-        sub(String, "instruction", self.got["instruction"].append, LATCHED)
-        sub(PoseStamped, "true_goal", self.got["goal"].append, LATCHED)
-        sub(Float32MultiArray, "true_value_map", self.got["values"].append, LATCHED)
-        sub(PoseStamped, "agent_pose", self.got["pose"].append, STEPS)
-        sub(Float32, "reward", self.got["reward"].append, STEPS)
-        sub(Bool, "terminated", self.got["terminated"].append, STEPS)
-        sub(DiagnosticArray, "/diagnostics", self.on_diagnostics, 10)
-        self.action = self.create_publisher(Int32, "action", STEPS)
-        self.goal = self.create_publisher(PoseStamped, "goal_pose", 10)
-        self.next = self.create_client(Trigger, "next_episode")
-        self.reset = self.create_client(Trigger, "reset_episode")
+        sub(OccupancyGrid, 'entity_map', self.got['map'].append, LATCHED)
+        sub(String, 'instruction', self.got['instruction'].append, LATCHED)
+        sub(PoseStamped, 'true_goal', self.got['goal'].append, LATCHED)
+        sub(Float32MultiArray, 'true_value_map', self.got['values'].append, LATCHED)
+        sub(PoseStamped, 'agent_pose', self.got['pose'].append, STEPS)
+        sub(Float32, 'reward', self.got['reward'].append, STEPS)
+        sub(Bool, 'terminated', self.got['terminated'].append, STEPS)
+        sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 10)
+        self.action = self.create_publisher(Int32, 'action', STEPS)
+        self.goal = self.create_publisher(PoseStamped, 'goal_pose', 10)
+        self.next = self.create_client(Trigger, 'next_episode')
+        self.reset = self.create_client(Trigger, 'reset_episode')
 
     def on_diagnostics(self, msg):
         # /diagnostics is global: keep this namespace's gridworld only
-        if msg.status and msg.status[0].name.startswith(f"{NAMESPACE}/gridworld:"):
-            self.got["diag"].append(msg)
+        if msg.status and msg.status[0].name.startswith(f'{NAMESPACE}/gridworld:'):
+            self.got['diag'].append(msg)
 
 
 def spin_until(executor, cond, timeout=10.0):
     end = time.monotonic() + timeout
     while not cond():
-        assert time.monotonic() < end, "timed out"
+        assert time.monotonic() < end, 'timed out'
         executor.spin_once(timeout_sec=0.02)
 
 
 def test_episode_actions_goal_walk_and_bad_input(ros):
     make, executor = ros
-    params = [Parameter("source", value="generator-local"), Parameter("episodes", value=3),
-              Parameter("seed", value=5), Parameter("step_period", value=0.01),
-              Parameter("resolution", value=0.5), Parameter("origin_x", value=2.0)]
+    params = [Parameter('source', value='generator-local'), Parameter('episodes', value=3),
+              Parameter('seed', value=5), Parameter('step_period', value=0.01),
+              Parameter('resolution', value=0.5), Parameter('origin_x', value=2.0)]
     gw = make(GridWorldNode, namespace=NAMESPACE, parameter_overrides=params)
     probe = make(Probe)
     got = probe.got
-    spin_until(executor, lambda: got["map"] and got["instruction"] and got["goal"]
-               and got["values"])
+    spin_until(executor, lambda: got['map'] and got['instruction'] and got['goal']
+               and got['values'])
     # agent poses are not latched: restart the episode now that the probe listens
     future = probe.reset.call_async(Trigger.Request())
-    spin_until(executor, lambda: future.done() and got["pose"])
-    data = generate(3, seed=5, mode="local")
+    spin_until(executor, lambda: future.done() and got['pose'])
+    data = generate(3, seed=5, mode='local')
     # the latched episode: data-set row 0 is the map's top (largest y) row
-    grid = convert.occupancy_grid_to_grid(got["map"][-1], 10 ** 6)
+    grid = convert.occupancy_grid_to_grid(got['map'][-1], 10 ** 6)
     assert np.array_equal(grid, data.grids[0])
-    assert list(got["map"][-1].data[:10]) == list(data.grids[0][-1])  # grid row 0 = south
-    assert got["instruction"][-1].data == data.instructions[0]
-    info = got["map"][-1].info
-    assert convert.point_to_cell(got["goal"][-1].pose.position.x, got["goal"][-1].pose.position.y,
+    assert list(got['map'][-1].data[:10]) == list(data.grids[0][-1])  # grid row 0 = south
+    assert got['instruction'][-1].data == data.instructions[0]
+    info = got['map'][-1].info
+    assert convert.point_to_cell(got['goal'][-1].pose.position.x, got['goal'][-1].pose.position.y,
                                  info) == tuple(data.goals[0])
-    np.testing.assert_allclose(convert.float32_multiarray_to_value_map(got["values"][-1]),
+    np.testing.assert_allclose(convert.float32_multiarray_to_value_map(got['values'][-1]),
                                data.values[0], atol=1e-5)
 
     def cell(pose):
         return convert.point_to_cell(pose.pose.position.x, pose.pose.position.y, info)
 
     # an action moves the agent and reports the entered cell's reward
-    start = cell(got["pose"][-1])
+    start = cell(got['pose'][-1])
     probe.action.publish(Int32(data=3))
-    spin_until(executor, lambda: got["reward"] and got["terminated"] and len(got["pose"]) >= 2)
+    spin_until(executor, lambda: got['reward'] and got['terminated'] and len(got['pose']) >= 2)
     moved = world.step_cell(start, 3, (10, 10))
-    assert cell(got["pose"][-1]) == moved
-    assert got["reward"][-1].data == pytest.approx(data.rewards[0][moved])
+    assert cell(got['pose'][-1]) == moved
+    assert got['reward'][-1].data == pytest.approx(data.rewards[0][moved])
 
     # bad input: warnings on /diagnostics, nothing moves
-    n_pose = len(got["pose"])
+    n_pose = len(got['pose'])
     probe.action.publish(Int32(data=7))
-    far = convert.cell_to_pose((0, 0), info, "map", gw.get_clock().now().to_msg())
+    far = convert.cell_to_pose((0, 0), info, 'map', gw.get_clock().now().to_msg())
     far.pose.position.x = -100.0
     probe.goal.publish(far)
-    wrong = convert.cell_to_pose((0, 0), info, "odom", gw.get_clock().now().to_msg())
+    wrong = convert.cell_to_pose((0, 0), info, 'odom', gw.get_clock().now().to_msg())
     probe.goal.publish(wrong)
-    spin_until(executor, lambda: len([d for d in got["diag"]
+    spin_until(executor, lambda: len([d for d in got['diag']
                                       if d.status[0].level == DiagnosticStatus.WARN]) >= 3)
-    messages = " | ".join(d.status[0].message for d in got["diag"])
-    assert "action 7 ignored" in messages and "outside" in messages and "'odom'" in messages
-    assert len(got["pose"]) == n_pose
+    messages = ' | '.join(d.status[0].message for d in got['diag'])
+    assert 'action 7 ignored' in messages and 'outside' in messages and "'odom'" in messages
+    assert len(got['pose']) == n_pose
 
     # a goal_pose is walked to, cell by cell
     future = probe.next.call_async(Trigger.Request())
     spin_until(executor, future.done)
-    spin_until(executor, lambda: got["instruction"][-1].data == data.instructions[1])
+    spin_until(executor, lambda: got['instruction'][-1].data == data.instructions[1])
     target = tuple(int(x) for x in data.goals[1])
-    probe.goal.publish(convert.cell_to_pose(target, info, "map", gw.get_clock().now().to_msg()))
-    spin_until(executor, lambda: got["terminated"] and got["terminated"][-1].data)
-    assert cell(got["pose"][-1]) == target
-    assert got["reward"][-1].data == pytest.approx(data.rewards[1][target])
+    probe.goal.publish(convert.cell_to_pose(target, info, 'map', gw.get_clock().now().to_msg()))
+    spin_until(executor, lambda: got['terminated'] and got['terminated'][-1].data)
+    assert cell(got['pose'][-1]) == target
+    assert got['reward'][-1].data == pytest.approx(data.rewards[1][target])
 
 
 def test_closed_loop_demo(tmp_path, capsys):
+    """Two episodes through the real processes. The grounder hears the first instruction as
+    it is published (no episode is restarted): the bag holds exactly one instruction and one
+    goal per episode. Its agent poses were logged on reception, although this process drew a
+    PNG between episodes."""
     from spatial_grounding_ros.ros.demo import run_demo
 
-    summary = run_demo(tmp_path, episodes=2, seed=1, data_dir=str(tmp_path / "no_data"),
+    summary = run_demo(tmp_path, episodes=2, seed=1, data_dir=str(tmp_path / 'no_data'),
                        step_period=0.02)
     out = capsys.readouterr().out
-    assert summary["episodes"] == 2
+    assert summary['episodes'] == 2
     # each episode's outcome is its own: terminated exactly when it ended on the true goal
-    for episode in summary["per_episode"]:
-        assert episode["reached"] == (episode["end"] == episode["truth"]), episode
-    assert [line[:3] for line in out.splitlines() if line.startswith("[")] == ["[0]", "[1]"]
-    assert (tmp_path / "episode_0.png").stat().st_size > 1000
-    assert summary["from_bag"]["n"] == 2
-    assert summary["from_bag"]["md"] == pytest.approx(summary["md"])
-    assert "pq" in summary["from_bag"]
+    for episode in summary['per_episode']:
+        assert episode['reached'] == (episode['end'] == episode['truth']), episode
+    assert [line[:3] for line in out.splitlines() if line.startswith('[')] == ['[0]', '[1]']
+    assert (tmp_path / 'episode_0.png').stat().st_size > 1000
+    assert summary['from_bag']['n'] == 2 and summary['from_bag']['unanswered'] == 0
+    assert summary['from_bag']['md'] == pytest.approx(summary['md'])
+    assert 'pq' in summary['from_bag']
+    recorded = {topic.rsplit('/', 1)[1]: n for topic, n in summary['recorded'].items()}
+    assert recorded['instruction'] == 2 and recorded['goal_pose'] == 2, recorded
+    assert recorded['agent_pose'] == recorded['reward'] + 2  # a start pose per episode
+
+    make_reader = pytest.importorskip('mcap.reader', reason='pip install mcap').make_reader
+    [mcap_file] = (tmp_path / 'demo_bag').glob('*.mcap')
+    with open(mcap_file, 'rb') as stream:
+        delays = [m.log_time - m.publish_time
+                  for _, c, m in make_reader(stream).iter_messages()
+                  if c.topic.endswith('/agent_pose')]
+    assert delays and max(delays) < 0.5e9, max(delays) / 1e9
+
+
+@pytest.mark.parametrize('parameter, needle', [
+    ('step_period:=-1.0', 'parameter step_period must be 0.001..60, got -1.0'),
+    ('step_period:=1', 'parameter step_period must be a double (write 5.0, not 5), got an'),
+    ('source:=nowhere', 'parameter source must be one of generator, generator-local'),
+    ('seed:=abc', "parameter seed must be an integer, got a string 'abc'"),
+    ('frame_id:=""', 'parameter frame_id must not be empty'),
+    ('source:=isi', 'data file not found'),  # a task whose data is not in data_dir
+])
+def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path, parameter, needle):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    exe = Path(sys.executable).parent / 'gridworld'
+    if not exe.is_file():
+        pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
+    result = subprocess.run([str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}_bad', '-p',
+                             parameter, '-p', f'data_dir:={tmp_path / "no_data"}'],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1, result.stderr
+    err = result.stderr
+    assert err.splitlines() == [err.strip()] and err.startswith('gridworld: error: '), err
+    assert needle in err, err

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("rclpy", reason="rclpy is not installed")
-ament_packages = pytest.importorskip("ament_index_python.packages")
+pytest.importorskip('rclpy', reason='rclpy is not installed')
+ament_packages = pytest.importorskip('ament_index_python.packages')
 
 from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
 
@@ -21,35 +21,35 @@ from spatial_grounding_ros.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT, Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 
-PACKAGE = "spatial_grounding_ros"
+PACKAGE = 'spatial_grounding_ros'
 REPO = Path(__file__).resolve().parents[1]
-COLCON = Path(sys.executable).parent / "colcon"
-NAMESPACE = unique_namespace("colcon_test")
+COLCON = Path(sys.executable).parent / 'colcon'
+NAMESPACE = unique_namespace('colcon_test')
 # what a source checkout holds besides the package: never part of a build
-NOT_SOURCE = (".venv", ".git", "build", "install", "log", "results", "out", "demo_out",
-              "__pycache__", "*.egg-info", ".pytest_cache")
+NOT_SOURCE = ('.venv', '.git', 'build', 'install', 'log', 'results', 'out', 'demo_out',
+              '__pycache__', '*.egg-info', '.pytest_cache')
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def install_prefix(tmp_path_factory):
     if not COLCON.is_file():
-        pytest.skip(f"colcon is not installed next to {sys.executable}")
-    workspace = tmp_path_factory.mktemp("colcon_ws")
-    shutil.copytree(REPO, workspace / "src" / PACKAGE, ignore=shutil.ignore_patterns(*NOT_SOURCE))
+        pytest.skip(f'colcon is not installed next to {sys.executable}')
+    workspace = tmp_path_factory.mktemp('colcon_ws')
+    shutil.copytree(REPO, workspace / 'src' / PACKAGE, ignore=shutil.ignore_patterns(*NOT_SOURCE))
     build = subprocess.run(
-        [str(COLCON), "build", "--base-paths", "src", "--build-base", "build",
-         "--install-base", "install"],
+        [str(COLCON), 'build', '--base-paths', 'src', '--build-base', 'build',
+         '--install-base', 'install'],
         cwd=workspace, capture_output=True, text=True, timeout=120)
     assert build.returncode == 0, build.stdout[-3000:] + build.stderr[-3000:]
-    return workspace / "install" / PACKAGE  # colcon's default isolated layout
+    return workspace / 'install' / PACKAGE  # colcon's default isolated layout
 
 
 @pytest.fixture
 def ament_env(install_prefix, monkeypatch):
     """What sourcing install/setup.bash sets for this package (its dsv hooks): the prefix on
     AMENT_PREFIX_PATH, its site-packages on PYTHONPATH."""
-    [site] = glob.glob(str(install_prefix / "lib" / "python3*" / "site-packages"))
-    for var, value in (("AMENT_PREFIX_PATH", str(install_prefix)), ("PYTHONPATH", site)):
+    [site] = glob.glob(str(install_prefix / 'lib' / 'python3*' / 'site-packages'))
+    for var, value in (('AMENT_PREFIX_PATH', str(install_prefix)), ('PYTHONPATH', site)):
         monkeypatch.setenv(var, os.pathsep.join(filter(None, [value, os.environ.get(var)])))
     return dict(os.environ)
 
@@ -57,43 +57,55 @@ def ament_env(install_prefix, monkeypatch):
 def test_ament_index_finds_executables_and_share_files(install_prefix, ament_env):
     prefix = Path(ament_packages.get_package_prefix(PACKAGE))
     assert prefix == install_prefix
-    for name in ("grounder", "gridworld"):
-        exe = prefix / "lib" / PACKAGE / name
+    for name in ('grounder', 'gridworld'):
+        exe = prefix / 'lib' / PACKAGE / name
         assert exe.is_file() and os.access(exe, os.X_OK), exe
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
-    for name in ("config/grounder.yaml", "config/entities_puddleworld.yaml",
-                 "config/entities_isi.yaml", "launch/grounder.launch.py", "package.xml"):
+    for name in INSTALLED:
         assert (share / name).is_file(), name
 
 
-def test_installed_launch_file_is_the_checked_one(install_prefix, ament_env):
-    """The launch file colcon installs is the source file whose arguments, node and
-    parameters test_ros_config checks (that part needs no ROS launch)."""
+# what the share directory must hold, each a copy of the source file
+INSTALLED = ('config/grounder.yaml', 'config/gridworld.yaml', 'config/entities_puddleworld.yaml',
+             'config/entities_isi.yaml', 'launch/grounder.launch.py', 'launch/demo.launch.py',
+             'rviz/spatial_grounding.rviz', 'package.xml', 'LICENSE')
+
+
+def test_installed_files_are_the_checked_ones(install_prefix, ament_env):
+    """The launch, params and RViz files colcon installs are the source files whose
+    arguments, nodes, parameters and displays test_ros_config checks (that part needs no
+    ROS launch); the installed params files load with rclpy's parser."""
+    from rclpy.parameter import parameter_dict_from_yaml_file
+
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
-    installed = (share / "launch" / "grounder.launch.py").read_text()
-    assert installed == (REPO / "launch" / "grounder.launch.py").read_text()
-    compile(installed, "grounder.launch.py", "exec")
+    for name in INSTALLED:
+        assert (share / name).read_bytes() == (REPO / name).read_bytes(), name
+    for name in ('grounder.launch.py', 'demo.launch.py'):
+        compile((share / 'launch' / name).read_text(), name, 'exec')
+    for name in ('grounder.yaml', 'gridworld.yaml'):
+        assert parameter_dict_from_yaml_file(str(share / 'config' / name)), name
 
 
-def test_launch_description_builds_with_ros_launch(install_prefix, ament_env):
-    """What only ROS launch can show: the installed file builds a description holding the
-    grounder Node. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and
-    runs on a ROS 2 system (colcon test)."""
+@pytest.mark.parametrize('name, nodes', [('grounder.launch.py', 1), ('demo.launch.py', 3)])
+def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, name, nodes):
+    """What only ROS launch can show: the installed file builds a description holding its
+    Nodes. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and runs on a
+    ROS 2 system (colcon test)."""
     # launch.actions, not launch: this repository's launch/ folder imports as `launch`
-    pytest.importorskip("launch.actions", reason="ROS launch is not installed (not on PyPI); "
+    pytest.importorskip('launch.actions', reason='ROS launch is not installed (not on PyPI); '
                         "test_ros_config checks the file's arguments, node and parameters")
-    pytest.importorskip("launch_ros.actions", reason="launch_ros is not installed (not on PyPI)")
+    pytest.importorskip('launch_ros.actions', reason='launch_ros is not installed (not on PyPI)')
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
     namespace = {}
-    exec((share / "launch" / "grounder.launch.py").read_text(), namespace)
-    description = namespace["generate_launch_description"]()
-    assert any(type(e).__name__ == "Node" for e in description.entities)
+    exec((share / 'launch' / name).read_text(), namespace)
+    description = namespace['generate_launch_description']()
+    assert sum(type(e).__name__ == 'Node' for e in description.entities) == nodes
 
 
 def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env,
                                                         ros_context):
-    exe = Path(ament_packages.get_package_prefix(PACKAGE)) / "lib" / PACKAGE / "grounder"
-    args = ["--ros-args", "-r", f"__ns:={NAMESPACE}"]
+    exe = Path(ament_packages.get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'grounder'
+    args = ['--ros-args', '-r', f'__ns:={NAMESPACE}']
     # the packaged defaults, packaged checkpoint included: a checkpoint that cannot load fails
     # here (and the node would exit with an error), never falls back to another model
     checkpoint = resolve_checkpoint(DEFAULT_CHECKPOINT)
@@ -102,22 +114,22 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
                                stderr=subprocess.STDOUT, text=True)
     try:
         graph = ros_context
-        probe = graph.add(make_probe(graph.context, NAMESPACE, f"{NAMESPACE}/spatial_grounder"))
+        probe = graph.add(make_probe(graph.context, NAMESPACE, f'{NAMESPACE}/spatial_grounder'))
         assert graph.wait_for(
-            lambda: ("spatial_grounder", NAMESPACE) in probe.get_node_names_and_namespaces()
+            lambda: ('spatial_grounder', NAMESPACE) in probe.get_node_names_and_namespaces()
             or process.poll() is not None, timeout=45)
         assert process.poll() is None, process.stdout.read()
         assert graph.wait_for(probe.connected, timeout=15)
 
-        world = generate(1, seed=5, mode="global")
+        world = generate(1, seed=5, mode='global')
         grid, text = world.grids[0], world.instructions[0]
         message = probe.publish_map(grid)
         assert graph.wait_for(lambda: probe.holds(message), timeout=15)
         before = probe.counts()
         probe.publish_instruction(text)
-        assert graph.wait_for(lambda: probe.new("goals", before), timeout=15)
+        assert graph.wait_for(lambda: probe.new('goals', before), timeout=15)
         expected = Grounder.from_checkpoint(str(checkpoint)).ground(grid, text).goal
-        position = probe.new("goals", before)[0].pose.position
+        position = probe.new('goals', before)[0].pose.position
         assert (position.x, position.y) == pytest.approx(
             convert.cell_centre(expected, convert.map_info(grid.shape))[:2])
     finally:
@@ -126,6 +138,6 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
     # its config came from the colcon install, not from this source tree, and its model is
     # the packaged default of the install
     share = ament_packages.get_package_share_directory(PACKAGE)
-    assert f"entity table {share}/config/entities_puddleworld.yaml" in output, output
-    assert f"model {load_checkpoint(checkpoint).name} from {install_prefix}" in output, output
-    assert f"/{checkpoint.name}, entity table" in output, output
+    assert f'entity table {share}/config/entities_puddleworld.yaml' in output, output
+    assert f'model {load_checkpoint(checkpoint).name} from {install_prefix}' in output, output
+    assert f'/{checkpoint.name}, entity table' in output, output

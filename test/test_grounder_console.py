@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("rclpy", reason="rclpy is not installed")
+pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
 
@@ -20,21 +20,21 @@ from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.training import predict  # noqa: E402
 
-NAMESPACE = unique_namespace("console_test")
+NAMESPACE = unique_namespace('console_test')
 
 
 def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_context):
-    exe = Path(sys.executable).parent / "grounder"
+    exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
-        pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
-    test = load_task("pw-local", "test", data_dir).subset(np.arange(0, 399, 57))
+        pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
+    test = load_task('pw-local', 'test', data_dir).subset(np.arange(0, 399, 57))
     loaded = load_checkpoint(DEFAULT_CHECKPOINT)
     expected = world.argmax_cells(predict(loaded.model, loaded.vocab, test))
-    process = subprocess.Popen([str(exe), "--ros-args", "-r", f"__ns:={NAMESPACE}"],
+    process = subprocess.Popen([str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}'],
                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         graph = ros_context
-        probe = graph.add(make_probe(graph.context, NAMESPACE, f"{NAMESPACE}/spatial_grounder"))
+        probe = graph.add(make_probe(graph.context, NAMESPACE, f'{NAMESPACE}/spatial_grounder'))
         assert graph.wait_for(lambda: probe.connected() or process.poll() is not None, timeout=45)
         assert process.poll() is None, process.stdout.read()
         for grid, text, cell in zip(test.grids, test.instructions, expected):
@@ -44,8 +44,8 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
             assert graph.wait_for(lambda: probe.holds(message), timeout=15), text
             before = probe.counts()
             probe.publish_instruction(text)
-            assert graph.wait_for(lambda: probe.new("goals", before), timeout=15), text
-            position = probe.new("goals", before)[0].pose.position
+            assert graph.wait_for(lambda: probe.new('goals', before), timeout=15), text
+            position = probe.new('goals', before)[0].pose.position
             centre = convert.cell_centre(tuple(int(c) for c in cell), convert.map_info(grid.shape))
             assert (position.x, position.y) == pytest.approx(centre[:2]), text
     finally:
@@ -54,43 +54,53 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
 
 
 def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
-    """README: a bad checkpoint or entity table stops the node at start-up with one line
-    `grounder: error: ...` and exit status 1 (no traceback), naming the problem."""
-    exe = Path(sys.executable).parent / "grounder"
+    """README: a bad checkpoint, entity table or parameter value or type stops the node at
+    start-up with one line `grounder: error: ...` and exit status 1 (no traceback), naming
+    the problem."""
+    exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
-        pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
-    corrupt = tmp_path / "corrupt.pt"
-    corrupt.write_bytes(b"\x00 not a checkpoint")
+        pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
+    corrupt = tmp_path / 'corrupt.pt'
+    corrupt.write_bytes(b'\x00 not a checkpoint')
     cases = {  # parameter -> what the line must say
-        f"checkpoint:={tmp_path / 'missing.pt'}": "missing.pt: checkpoint not found",
-        f"checkpoint:={corrupt}": "corrupt.pt: not a readable checkpoint",
-        "entity_table:=entities_isi.yaml": "is not the one checkpoint pw_t-rnet-attn was trained on",
-        "entity_table:=no_such_table.yaml": "no_such_table.yaml: config file not found",
+        f"checkpoint:={tmp_path / 'missing.pt'}": 'missing.pt: checkpoint not found',
+        f'checkpoint:={corrupt}': 'corrupt.pt: not a readable checkpoint',
+        'entity_table:=entities_isi.yaml':
+            'is not the one checkpoint pw_t-rnet-attn was trained on',
+        'entity_table:=no_such_table.yaml': 'no_such_table.yaml: config file not found',
+        # parameters are checked against their declared type and range before anything loads
+        'max_cells:=abc': "parameter max_cells must be an integer, got a string 'abc'",
+        'max_cells:=-5': 'parameter max_cells must be 1..16777216, got -5',
+        'max_instruction_chars:=0': 'parameter max_instruction_chars must be 1..100000, got 0',
+        'torch_threads:=-3': 'parameter torch_threads must be 0..1024, got -3',
+        'value_map_encoding:=heat': 'parameter value_map_encoding must be one of display, cost',
+        'reground_on_map_change:=1': 'parameter reground_on_map_change must be a bool, got an',
+        "default_frame_id:=''": 'parameter default_frame_id must not be empty',
     }
-    namespace = unique_namespace("start_up_test")
-    processes = {p: subprocess.Popen([str(exe), "--ros-args", "-r", f"__ns:={namespace}",
-                                      "-p", p], stdout=subprocess.PIPE,
+    namespace = unique_namespace('start_up_test')
+    processes = {p: subprocess.Popen([str(exe), '--ros-args', '-r', f'__ns:={namespace}',
+                                      '-p', p], stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, text=True) for p in cases}
     for parameter, needle in cases.items():
         out, err = processes[parameter].communicate(timeout=120)
         assert processes[parameter].returncode == 1, (parameter, err)
-        assert err.splitlines() == [err.strip()] and err.startswith("grounder: error: "), err
+        assert err.splitlines() == [err.strip()] and err.startswith('grounder: error: '), err
         assert needle in err, (parameter, err)
 
 
 def test_a_bad_params_file_is_one_line_of_ours_and_exit_1(tmp_path):
     """README: a missing or malformed --params-file exits 1 with our one error line after
     rcl's own parse error, and no traceback."""
-    exe = Path(sys.executable).parent / "grounder"
+    exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
-        pytest.skip(f"{exe} is not installed (pip install -e . makes it)")
-    malformed = tmp_path / "malformed.yaml"
-    malformed.write_text("spatial_grounder: [unclosed\n")
-    for path in (tmp_path / "missing.yaml", malformed):
-        result = subprocess.run([str(exe), "--ros-args", "--params-file", str(path)],
+        pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
+    malformed = tmp_path / 'malformed.yaml'
+    malformed.write_text('spatial_grounder: [unclosed\n')
+    for path in (tmp_path / 'missing.yaml', malformed):
+        result = subprocess.run([str(exe), '--ros-args', '--params-file', str(path)],
                                 capture_output=True, text=True, timeout=60)
         assert result.returncode == 1, result.stderr
-        assert "Traceback" not in result.stderr
-        ours = [line for line in result.stderr.splitlines() if "[rcl]" not in line]
-        assert len(ours) == 1 and ours[0].startswith("grounder: error: "), result.stderr
-        assert "params file" in ours[0], result.stderr
+        assert 'Traceback' not in result.stderr
+        ours = [line for line in result.stderr.splitlines() if '[rcl]' not in line]
+        assert len(ours) == 1 and ours[0].startswith('grounder: error: '), result.stderr
+        assert 'params file' in ours[0], result.stderr

@@ -1,63 +1,92 @@
-"""config/: the entity tables are the core's, grounder.yaml is a ROS params file holding every
-parameter of the node, and config files are found from a path or by name."""
+"""config/, launch/ and rviz/ checked without ROS launch or RViz (not on PyPI): the entity
+tables are the core's; each shipped params file holds every parameter its node declares,
+with the declared default, keyed so that it applies in any namespace, and loads with
+rclpy's parser; the launch files declare the arguments the README uses and start our nodes
+with those params files; the RViz config shows our topics. Config files are found from a
+path or by name."""
+import ast
 from pathlib import Path
+import re
 
 import pytest
 import yaml
 
-from spatial_grounding_ros.entities import ISI, PUDDLEWORLD, EntityTable
+from spatial_grounding_ros.entities import EntityTable, ISI, PUDDLEWORLD
 from spatial_grounding_ros.ros.package_files import find_config
 
 REPO = Path(__file__).resolve().parents[1]
-GROUNDER_PARAMETERS = {
-    "checkpoint", "entity_table", "entity_map_topic", "instruction_topic", "value_map_topic",
-    "value_map_raw_topic", "relation_map_topic", "goal_pose_topic", "diagnostics_topic",
-    "max_cells", "max_instruction_chars", "reground_on_map_change", "torch_threads",
-    "default_frame_id"}
+SHARE = {'call': 'get_package_share_directory', 'args': ['spatial_grounding_ros']}
 
 
-@pytest.mark.parametrize("name, table", [("entities_puddleworld.yaml", PUDDLEWORLD),
-                                         ("entities_isi.yaml", ISI)])
+def lc(name: str) -> dict:
+    """A LaunchConfiguration(name), as launch_calls() reads it."""
+    return {'call': 'LaunchConfiguration', 'args': [name]}
+
+
+def node_parameters(node_module: str):
+    """(node name, its declared parameters) of grounder_node or gridworld_node."""
+    pytest.importorskip('rclpy', reason='rclpy is not installed')
+    import importlib
+
+    module = importlib.import_module(f'spatial_grounding_ros.ros.{node_module}')
+    return module.NODE_NAME, module.PARAMETERS
+
+
+@pytest.mark.parametrize('name, table', [('entities_puddleworld.yaml', PUDDLEWORLD),
+                                         ('entities_isi.yaml', ISI)])
 def test_entity_tables_are_the_core_tables(name, table):
-    assert EntityTable.from_yaml(REPO / "config" / name) == table
+    assert EntityTable.from_yaml(REPO / 'config' / name) == table
 
 
-def test_grounder_params_file_holds_every_parameter():
-    params = yaml.safe_load((REPO / "config" / "grounder.yaml").read_text())
-    assert set(params) == {"spatial_grounder"}
-    values = params["spatial_grounder"]["ros__parameters"]
-    assert set(values) == GROUNDER_PARAMETERS
-    assert values["checkpoint"] == "pw_t-rnet-attn"
-    assert EntityTable.from_yaml(find_config(values["entity_table"])) == PUDDLEWORLD
+@pytest.mark.parametrize('file, node_module', [('grounder.yaml', 'grounder_node'),
+                                               ('gridworld.yaml', 'gridworld_node')])
+def test_params_file_holds_every_declared_parameter_for_any_namespace(file, node_module):
+    """The shipped file is the node's declared defaults, keyed /**/<node> so that it applies
+    under -r __ns:=/robot1 too (test_ros_parameters starts nodes that way), and rclpy's own
+    parser reads it to the same values."""
+    from rclpy.parameter import parameter_dict_from_yaml_file, parameter_value_to_python
+
+    name, parameters = node_parameters(node_module)
+    params = yaml.safe_load((REPO / 'config' / file).read_text())
+    assert set(params) == {f'/**/{name}'}
+    values = params[f'/**/{name}']['ros__parameters']
+    assert values == {p.name: p.default for p in parameters}
+    assert [type(values[p.name]) for p in parameters] == [p.type for p in parameters]
+    parsed = parameter_dict_from_yaml_file(str(REPO / 'config' / file))
+    assert {k: parameter_value_to_python(v.value) for k, v in parsed.items()} == values
+
+
+def test_grounder_defaults_find_their_files():
+    _, parameters = node_parameters('grounder_node')
+    defaults = {p.name: p.default for p in parameters}
+    assert defaults['checkpoint'] == 'pw_t-rnet-attn'
+    assert EntityTable.from_yaml(find_config(defaults['entity_table'])) == PUDDLEWORLD
 
 
 def test_find_config_by_path_and_by_name(tmp_path):
-    own = tmp_path / "mine.yaml"
-    own.write_text("x: 1\n")
+    own = tmp_path / 'mine.yaml'
+    own.write_text('x: 1\n')
     assert find_config(own) == own
-    assert find_config("grounder.yaml").read_text() == (REPO / "config" /
-                                                        "grounder.yaml").read_text()
-    with pytest.raises(FileNotFoundError, match="no_such.yaml: config file not found"):
-        find_config("no_such.yaml")
+    assert find_config('grounder.yaml').read_text() == (REPO / 'config' /
+                                                        'grounder.yaml').read_text()
+    with pytest.raises(FileNotFoundError, match='no_such.yaml: config file not found'):
+        find_config('no_such.yaml')
 
 
-# --- launch/grounder.launch.py, read as source: `launch` is not on PyPI, so it cannot be
-# imported here (test_grounder_colcon builds the description where launch is installed)
-
-LAUNCH_FILE = REPO / "launch" / "grounder.launch.py"
+# --- launch/*.launch.py, read as source: `launch` is not on PyPI, so they cannot be imported
+# here (test_grounder_colcon builds the descriptions where ROS launch is installed)
 
 
-def launch_calls() -> dict:
-    """The launch file's generate_launch_description() as plain data, from its syntax tree:
-    every call becomes {"call": name, "args": [...], **keywords}, names resolve to their
-    module-level or local assignments, os.path.join to a list of its parts."""
-    import ast
-
-    tree = ast.parse(LAUNCH_FILE.read_text(), str(LAUNCH_FILE))
+def launch_calls(name: str) -> dict:
+    """A launch file's generate_launch_description() as plain data, from its syntax tree:
+    every call becomes {'call': name, 'args': [...], **keywords}, names resolve to their
+    module-level or local assignments, os.path.join to {'join': [parts]}, dicts to dicts."""
+    path = REPO / 'launch' / name
+    tree = ast.parse(path.read_text(), str(path))
     names = {t.id: node.value for node in tree.body if isinstance(node, ast.Assign)
              for t in node.targets}
     [function] = [n for n in tree.body if isinstance(n, ast.FunctionDef)
-                  and n.name == "generate_launch_description"]
+                  and n.name == 'generate_launch_description']
     names.update({t.id: node.value for node in function.body if isinstance(node, ast.Assign)
                   for t in node.targets})
 
@@ -66,55 +95,129 @@ def launch_calls() -> dict:
             return node.value
         if isinstance(node, ast.Name):
             return value(names[node.id])
-        if isinstance(node, ast.List):
+        if isinstance(node, (ast.List, ast.Tuple)):
             return [value(e) for e in node.elts]
+        if isinstance(node, ast.Dict):
+            out = {}
+            for k, v in zip(node.keys, node.values):
+                out.update(value(v) if k is None else {value(k): value(v)})
+            return out
         if isinstance(node, ast.Call):
             func = ast.unparse(node.func)
-            if func == "os.path.join":
-                return {"join": [value(a) for a in node.args]}
-            return {"call": func, "args": [value(a) for a in node.args],
+            if func == 'os.path.join':
+                return {'join': [value(a) for a in node.args]}
+            return {'call': func, 'args': [value(a) for a in node.args],
                     **{k.arg: value(k.value) for k in node.keywords}}
-        raise AssertionError(f"unexpected launch file syntax: {ast.unparse(node)}")
+        raise AssertionError(f'unexpected launch file syntax: {ast.unparse(node)}')
 
     [ret] = [n for n in function.body if isinstance(n, ast.Return)]
     return value(ret.value)
 
 
-def test_launch_file_declares_its_arguments_and_starts_the_grounder():
-    """`ros2 launch spatial_grounding_ros grounder.launch.py params_file:=... namespace:=...`:
-    the two arguments exist with the documented defaults (the installed grounder.yaml, no
-    namespace), the node is our `grounder` executable named as its parameters file expects,
-    and it takes the namespace and the parameters file from those arguments."""
-    description = launch_calls()
-    assert description["call"] == "LaunchDescription"
-    [entities] = description["args"]
-    arguments = {e["args"][0]: e for e in entities if e["call"] == "DeclareLaunchArgument"}
-    [node] = [e for e in entities if e["call"] == "Node"]
-    assert len(entities) == len(arguments) + 1
-    assert set(arguments) == {"params_file", "namespace"}
-    assert arguments["namespace"]["default_value"] == ""
-    default = arguments["params_file"]["default_value"]["join"]
-    assert default[0] == {"call": "get_package_share_directory", "args": ["spatial_grounding_ros"]}
-    assert default[1:] == ["config", "grounder.yaml"] and (REPO / "config" / "grounder.yaml").is_file()
-    # the executable is a console script of the package (colcon installs it into lib/<package>)
-    assert node["package"] == "spatial_grounding_ros" and node["executable"] == "grounder"
-    assert "grounder = spatial_grounding_ros.ros.grounder_node:main" in (REPO / "setup.py").read_text()
-    # the parameters file's section is the node's name, so its parameters reach the node
-    params = yaml.safe_load((REPO / "config" / "grounder.yaml").read_text())
-    assert node["name"] == "spatial_grounder" and set(params) == {node["name"]}
-    assert node["namespace"] == {"call": "LaunchConfiguration", "args": ["namespace"]}
-    assert node["parameters"] == [{"call": "LaunchConfiguration", "args": ["params_file"]}]
+def launch_parts(name: str):
+    """({argument: DeclareLaunchArgument call}, [Node calls]) of a launch file."""
+    description = launch_calls(name)
+    assert description['call'] == 'LaunchDescription'
+    [entities] = description['args']
+    arguments = {e['args'][0]: e for e in entities if e['call'] == 'DeclareLaunchArgument'}
+    nodes = [e for e in entities if e['call'] == 'Node']
+    assert len(entities) == len(arguments) + len(nodes)
+    assert all(a.get('description') for a in arguments.values())
+    return arguments, nodes
 
 
-def test_readme_launch_line_uses_the_declared_arguments():
-    """The README's `ros2 launch` line passes only arguments the launch file declares."""
-    import re
+def check_our_node(node: dict, executable: str, params_argument: str) -> dict:
+    """A Node of our package: the console script, the name its params file is keyed by,
+    the namespace argument, the params file then the launch-argument overrides (names the
+    node declares), and the log level. Returns the overrides."""
+    name, parameters = node_parameters(f'{executable}_node')
+    assert node['package'] == 'spatial_grounding_ros' and node['executable'] == executable
+    assert f'{executable} = spatial_grounding_ros.ros.{executable}_node:main' in \
+        (REPO / 'setup.py').read_text()
+    params = yaml.safe_load(find_config(f'{executable}.yaml').read_text())
+    assert node['name'] == name and set(params) == {f'/**/{name}'}
+    assert node['namespace'] == lc('namespace')
+    params_file, overrides = node['parameters']
+    assert params_file == lc(params_argument)
+    declared = {p.name for p in parameters} | {'use_sim_time'}
+    assert set(overrides) <= declared and overrides['use_sim_time'] == lc('use_sim_time')
+    assert node['arguments'] == ['--ros-args', '--log-level', lc('log_level')]
+    return overrides
 
-    declared = {e["args"][0] for e in launch_calls()["args"][0]
-                if e["call"] == "DeclareLaunchArgument"}
-    lines = [line for line in (REPO / "README.md").read_text().splitlines()
-             if line.startswith("ros2 launch spatial_grounding_ros grounder.launch.py")]
-    assert lines
-    for line in lines:
-        used = set(re.findall(r"(\w+):=", line))
-        assert used and used <= declared, line
+
+def check_default_params_file(argument: dict, file: str) -> None:
+    assert argument['default_value'] == {'join': [SHARE, 'config', file]}
+    assert (REPO / 'config' / file).is_file()
+
+
+def test_grounder_launch_file_arguments_and_node():
+    """`ros2 launch spatial_grounding_ros grounder.launch.py namespace:=... use_sim_time:=...
+    log_level:=... autostart:=... params_file:=...` reach the grounder."""
+    arguments, [node] = launch_parts('grounder.launch.py')
+    assert set(arguments) == {'namespace', 'params_file', 'use_sim_time', 'autostart',
+                              'log_level'}
+    defaults = {k: a['default_value'] for k, a in arguments.items() if k != 'params_file'}
+    assert defaults == {'namespace': '', 'use_sim_time': 'false', 'autostart': 'true',
+                        'log_level': 'info'}
+    check_default_params_file(arguments['params_file'], 'grounder.yaml')
+    overrides = check_our_node(node, 'grounder', 'params_file')
+    assert overrides == {'use_sim_time': lc('use_sim_time'), 'autostart': lc('autostart')}
+
+
+def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
+    arguments, nodes = launch_parts('demo.launch.py')
+    assert set(arguments) == {'namespace', 'grounder_params_file', 'gridworld_params_file',
+                              'use_sim_time', 'log_level', 'rviz'}
+    assert arguments['rviz']['default_value'] == 'false'
+    check_default_params_file(arguments['grounder_params_file'], 'grounder.yaml')
+    check_default_params_file(arguments['gridworld_params_file'], 'gridworld.yaml')
+    grounder, gridworld, rviz = nodes
+    check_our_node(grounder, 'grounder', 'grounder_params_file')
+    overrides = check_our_node(gridworld, 'gridworld', 'gridworld_params_file')
+    # the first episode waits for the grounder's instruction subscription
+    assert overrides['start_after_subscribers'] == 1
+    assert 'condition' not in grounder and 'condition' not in gridworld
+    assert (rviz['package'], rviz['executable']) == ('rviz2', 'rviz2')
+    assert rviz['condition'] == {'call': 'IfCondition', 'args': [lc('rviz')]}
+    assert rviz['namespace'] == lc('namespace')  # its relative topics follow the nodes
+    [flag, config] = rviz['arguments']
+    assert flag == '-d' and config == {'join': [SHARE, 'rviz', 'spatial_grounding.rviz']}
+    assert (REPO / 'rviz' / 'spatial_grounding.rviz').is_file()
+
+
+def test_readme_launch_lines_use_the_declared_arguments():
+    """Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README passes
+    only arguments X declares (and the README shows both launch files)."""
+    seen = set()
+    for line in (REPO / 'README.md').read_text().splitlines():
+        match = re.match(r'ros2 launch spatial_grounding_ros (\S+\.launch\.py)(.*)', line)
+        if not match:
+            continue
+        file, rest = match.groups()
+        seen.add(file)
+        declared = set(launch_parts(file)[0])
+        used = set(re.findall(r'(\w+):=', rest))
+        assert used <= declared, line
+    assert seen == {'grounder.launch.py', 'demo.launch.py'}
+
+
+# --- rviz/spatial_grounding.rviz
+
+def test_rviz_config_shows_the_maps_goal_and_agent_on_relative_topics():
+    config = yaml.safe_load((REPO / 'rviz' / 'spatial_grounding.rviz').read_text())
+    manager = config['Visualization Manager']
+    assert manager['Global Options']['Fixed Frame'] == 'map'
+    displays = {d['Topic']['Value']: d for d in manager['Displays'] if 'Topic' in d}
+    assert set(displays) == {'entity_map', 'value_map', 'relation_map', 'goal_pose',
+                             'agent_pose'}
+    for topic in ('entity_map', 'value_map', 'relation_map'):
+        d = displays[topic]
+        assert d['Class'] == 'rviz_default_plugins/Map'
+        # the publishers are transient local: a volatile display would miss a held map
+        assert d['Topic']['Durability Policy'] == 'Transient Local'
+        assert d['Topic']['Reliability Policy'] == 'Reliable'
+    assert displays['value_map']['Color Scheme'] == 'costmap'
+    for topic in ('goal_pose', 'agent_pose'):
+        assert displays[topic]['Class'] == 'rviz_default_plugins/Pose'
+    [goal_tool] = [t for t in manager['Tools'] if t['Class'] == 'rviz_default_plugins/SetGoal']
+    assert goal_tool['Topic']['Value'] == 'goal_pose'

@@ -5,13 +5,13 @@ import math
 import numpy as np
 import pytest
 
-pytest.importorskip("nav_msgs.msg", reason="ROS 2 message packages are not installed")
+pytest.importorskip('nav_msgs.msg', reason='ROS 2 message packages are not installed')
 
 from std_msgs.msg import Header  # noqa: E402
 
 from spatial_grounding_ros.ros import convert  # noqa: E402
 
-HEADER = Header(frame_id="map")
+HEADER = Header(frame_id='map')
 
 
 def test_grid_round_trip_puts_data_set_row_0_at_the_largest_grid_row():
@@ -44,7 +44,7 @@ def test_rotated_origin_turns_the_grid():
     assert (x2, y2) == pytest.approx((8.5, 0.5))
 
 
-@pytest.mark.parametrize("yaw", [0.0, 0.7, -2.5])
+@pytest.mark.parametrize('yaw', [0.0, 0.7, -2.5])
 def test_point_to_cell_inverts_cell_centre(yaw):
     info = convert.map_info((3, 4), resolution=0.25, origin=(-1.0, 2.0), yaw=yaw)
     for row in range(3):
@@ -58,12 +58,12 @@ def test_cell_to_pose_is_stamped_in_the_map_frame():
     info = convert.map_info((2, 2), resolution=2.0)
     stamp = Header().stamp
     stamp.sec = 5
-    pose = convert.cell_to_pose((0, 1), info, "odom", stamp)
-    assert pose.header.frame_id == "odom" and pose.header.stamp.sec == 5
+    pose = convert.cell_to_pose((0, 1), info, 'odom', stamp)
+    assert pose.header.frame_id == 'odom' and pose.header.stamp.sec == 5
     assert (pose.pose.position.x, pose.pose.position.y) == pytest.approx((3.0, 3.0))
     assert pose.pose.orientation.w == 1.0
-    with pytest.raises(ValueError, match="outside"):
-        convert.cell_to_pose((2, 0), info, "map", stamp)
+    with pytest.raises(ValueError, match='outside'):
+        convert.cell_to_pose((2, 0), info, 'map', stamp)
 
 
 def test_value_map_is_scaled_to_0_100_in_grid_order():
@@ -73,6 +73,21 @@ def test_value_map_is_scaled_to_0_100_in_grid_order():
     flat = convert.value_map_to_occupancy_grid(np.full((2, 2), 7.0), HEADER,
                                                convert.map_info((2, 2)))
     assert list(flat.data) == [0, 0, 0, 0]
+
+
+def test_cost_encoding_puts_the_best_cell_at_0_as_a_costmap_reads_it():
+    """`value_map_encoding: cost`: the reverse of the display scale, best 0, worst 100
+    (lethal), so a planner reading value_map as a costmap is drawn to the goal."""
+    values = np.array([[3.0, -1.0], [1.0, 0.0]])  # row 0 = north
+    info = convert.map_info((2, 2))
+    cost = convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='cost')
+    display = convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='display')
+    assert list(cost.data) == [50, 75, 0, 100]
+    assert [c + d for c, d in zip(cost.data, display.data)] == [100] * 4
+    flat = convert.value_map_to_occupancy_grid(np.full((2, 2), 7.0), HEADER, info, 'cost')
+    assert list(flat.data) == [0, 0, 0, 0]
+    with pytest.raises(ValueError, match="unknown value map encoding 'heat'"):
+        convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='heat')
 
 
 def test_relation_map_is_magnitude_with_zero_kept():
@@ -87,19 +102,19 @@ def test_float32_multiarray_layout_matches_the_occupancy_grid_order():
     values = np.arange(6, dtype=np.float32).reshape(2, 3) / 7  # not exactly representable
     msg = convert.value_map_to_float32_multiarray(values)
     dims = [(d.label, d.size, d.stride) for d in msg.layout.dim]
-    assert dims == [("height", 2, 6), ("width", 3, 3)] and msg.layout.data_offset == 0
+    assert dims == [('height', 2, 6), ('width', 3, 3)] and msg.layout.data_offset == 0
     np.testing.assert_array_equal(np.asarray(msg.data, np.float32), values[::-1].ravel())
     np.testing.assert_array_equal(convert.float32_multiarray_to_value_map(msg), values)
 
 
-@pytest.mark.parametrize("change, problem", [
-    (dict(width=0), "width and height must be positive"),
-    (dict(height=0), "width and height must be positive"),
-    (dict(width=300, height=300), "more than max_cells"),
-    (dict(resolution=float("nan")), "resolution nan"),
-    (dict(resolution=0.0), "resolution 0.0"),
-    (dict(resolution=-1.0), "resolution -1.0"),
-    (dict(resolution=float("inf")), "resolution inf"),
+@pytest.mark.parametrize('change, problem', [
+    (dict(width=0), 'width and height must be positive'),
+    (dict(height=0), 'width and height must be positive'),
+    (dict(width=300, height=300), 'more than max_cells'),
+    (dict(resolution=float('nan')), 'resolution nan'),
+    (dict(resolution=0.0), 'resolution 0.0'),
+    (dict(resolution=-1.0), 'resolution -1.0'),
+    (dict(resolution=float('inf')), 'resolution inf'),
 ])
 def test_bad_map_info_is_named(change, problem):
     msg = convert.grid_to_occupancy_grid(np.zeros((3, 3), int), HEADER)
@@ -112,13 +127,13 @@ def test_bad_map_info_is_named(change, problem):
 def test_bad_origin_and_data_length_are_named():
     msg = convert.grid_to_occupancy_grid(np.zeros((3, 3), int), HEADER)
     msg.info.origin.orientation.w = 0.0
-    with pytest.raises(ValueError, match="not a valid quaternion"):
+    with pytest.raises(ValueError, match='not a valid quaternion'):
         convert.occupancy_grid_to_grid(msg, max_cells=100)
     msg = convert.grid_to_occupancy_grid(np.zeros((3, 3), int), HEADER)
-    msg.info.origin.position.x = float("nan")
-    with pytest.raises(ValueError, match="origin position"):
+    msg.info.origin.position.x = float('nan')
+    with pytest.raises(ValueError, match='origin position'):
         convert.occupancy_grid_to_grid(msg, max_cells=100)
     msg = convert.grid_to_occupancy_grid(np.zeros((3, 3), int), HEADER)
     msg.data = [0] * 8
-    with pytest.raises(ValueError, match="8 values"):
+    with pytest.raises(ValueError, match='8 values'):
         convert.occupancy_grid_to_grid(msg, max_cells=100)

@@ -24,26 +24,26 @@ from .node_support import stop_processes
 
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
 # run, that share a ROS_DOMAIN_ID never answer each other's requests
-NAMESPACE = f"/bench_{os.getpid()}"
+NAMESPACE = f'/bench_{os.getpid()}'
 
 
-def process_rss_mb(pid: int | str = "self") -> float:
+def process_rss_mb(pid: int | str = 'self') -> float:
     """Resident set size of a process now (Linux /proc), in MB."""
-    with open(f"/proc/{pid}/status") as status:
+    with open(f'/proc/{pid}/status') as status:
         for line in status:
-            if line.startswith("VmRSS:"):
+            if line.startswith('VmRSS:'):
                 return int(line.split()[1]) / 1024
-    raise RuntimeError(f"no VmRSS for process {pid}")
+    raise RuntimeError(f'no VmRSS for process {pid}')
 
 
 class LatencyClient(Node):
     def __init__(self, context):
-        super().__init__("bench_client", namespace=NAMESPACE, context=context)
-        self.map_pub = self.create_publisher(OccupancyGrid, "entity_map", LATCHED)
-        self.instruction_pub = self.create_publisher(String, "instruction", 10)
+        super().__init__('bench_client', namespace=NAMESPACE, context=context)
+        self.map_pub = self.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
+        self.instruction_pub = self.create_publisher(String, 'instruction', 10)
         self.goal_received = threading.Event()
         self.received_at = 0.0
-        self.create_subscription(PoseStamped, "goal_pose", self.on_goal, 10)
+        self.create_subscription(PoseStamped, 'goal_pose', self.on_goal, 10)
 
     def on_goal(self, msg: PoseStamped) -> None:
         self.received_at = time.perf_counter()
@@ -51,7 +51,7 @@ class LatencyClient(Node):
 
     def connected(self) -> bool:
         return (self.instruction_pub.get_subscription_count() > 0
-                and self.count_publishers(f"{NAMESPACE}/goal_pose") > 0)
+                and self.count_publishers(f'{NAMESPACE}/goal_pose') > 0)
 
     def request(self, text: str, timeout: float) -> float:
         """Seconds from publishing `text` to its goal_pose."""
@@ -59,7 +59,7 @@ class LatencyClient(Node):
         sent = time.perf_counter()
         self.instruction_pub.publish(String(data=text))
         if not self.goal_received.wait(timeout):
-            raise RuntimeError(f"no goal_pose within {timeout} s for {text!r}")
+            raise RuntimeError(f'no goal_pose within {timeout} s for {text!r}')
         return self.received_at - sent
 
 
@@ -68,11 +68,11 @@ def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str
     """p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
     grounder process's RSS after the warm-up and at the end."""
     # loopback only, and a domain of its own unless the caller chose one (both processes)
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 100)))
+    os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(1, 100)))
     node_process = subprocess.Popen(
-        [*executable("grounder"), "--ros-args", "-r", f"__ns:={NAMESPACE}",
-         "-p", f"checkpoint:={checkpoint}"],
+        [*executable('grounder'), '--ros-args', '-r', f'__ns:={NAMESPACE}',
+         '-p', f'checkpoint:={checkpoint}'],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     context = rclpy.Context()
     rclpy.init(context=context)
@@ -85,9 +85,9 @@ def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str
         deadline = time.monotonic() + 60
         while not client.connected():
             if node_process.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError("the grounder node did not come up")
+                raise RuntimeError('the grounder node did not come up')
             time.sleep(0.05)
-        client.map_pub.publish(convert.grid_to_occupancy_grid(grid, Header(frame_id="map")))
+        client.map_pub.publish(convert.grid_to_occupancy_grid(grid, Header(frame_id='map')))
         client.request(instructions[0], timeout=30)  # the first one also waits for the map
         for i in range(warmup):
             client.request(instructions[i % len(instructions)], timeout=10)
@@ -105,10 +105,10 @@ def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str
         context.try_shutdown()
         stop_processes(node_process)
     ms = np.array(latencies) * 1e3
-    return {"requests": requests, "map": f"{grid.shape[0]}x{grid.shape[1]}",
-            "p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99)),
-            "max_ms": float(ms.max()), "mean_ms": float(ms.mean()),
-            "node_rss_mb_after_warmup": rss_after_warmup, "node_rss_mb_end": rss_end,
-            "measured": "instruction published by a client node in the bench process -> "
-                        "goal_pose received by it; the grounder node in its own process "
-                        f"(console script), one held map, {warmup} warm-up requests first"}
+    return {'requests': requests, 'map': f'{grid.shape[0]}x{grid.shape[1]}',
+            'p50_ms': float(np.percentile(ms, 50)), 'p99_ms': float(np.percentile(ms, 99)),
+            'max_ms': float(ms.max()), 'mean_ms': float(ms.mean()),
+            'node_rss_mb_after_warmup': rss_after_warmup, 'node_rss_mb_end': rss_end,
+            'measured': 'instruction published by a client node in the bench process -> '
+                        'goal_pose received by it; the grounder node in its own process '
+                        f'(console script), one held map, {warmup} warm-up requests first'}

@@ -19,6 +19,8 @@ from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 from ..bags import multiarray_to_map
 
 PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
+# value_map cells: best = 100 (display) or best = 0 (cost, as a costmap reads it)
+VALUE_MAP_ENCODINGS = ('display', 'cost')
 
 
 def _quaternion(pose: Pose) -> np.ndarray:
@@ -27,7 +29,7 @@ def _quaternion(pose: Pose) -> np.ndarray:
     q = np.array([o.x, o.y, o.z, o.w], dtype=np.float64)
     norm = float(np.linalg.norm(q))
     if not np.isfinite(q).all() or norm < 1e-9:
-        raise ValueError(f"map origin orientation {q.tolist()} is not a valid quaternion")
+        raise ValueError(f'map origin orientation {q.tolist()} is not a valid quaternion')
     return q / norm
 
 
@@ -41,17 +43,17 @@ def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
 def check_map_info(info: MapMetaData, max_cells: int) -> None:
     """Raise ValueError naming what is wrong with a map's size, resolution or origin."""
     if info.width == 0 or info.height == 0:
-        raise ValueError(f"map size is {info.width}x{info.height} (width x height): "
-                         "width and height must be positive")
+        raise ValueError(f'map size is {info.width}x{info.height} (width x height): '
+                         'width and height must be positive')
     cells = info.width * info.height
     if cells > max_cells:
-        raise ValueError(f"map has {cells} cells ({info.width}x{info.height}), more than "
-                         f"max_cells={max_cells}")
+        raise ValueError(f'map has {cells} cells ({info.width}x{info.height}), more than '
+                         f'max_cells={max_cells}')
     if not math.isfinite(info.resolution) or info.resolution <= 0:
-        raise ValueError(f"map resolution {info.resolution} must be a positive finite number")
+        raise ValueError(f'map resolution {info.resolution} must be a positive finite number')
     p = info.origin.position
     if not all(math.isfinite(c) for c in (p.x, p.y, p.z)):
-        raise ValueError(f"map origin position ({p.x}, {p.y}, {p.z}) is not finite")
+        raise ValueError(f'map origin position ({p.x}, {p.y}, {p.z}) is not finite')
     _quaternion(info.origin)
 
 
@@ -63,8 +65,8 @@ def occupancy_grid_to_grid(msg: OccupancyGrid, max_cells: int) -> np.ndarray:
     info = msg.info
     check_map_info(info, max_cells)
     if len(msg.data) != info.width * info.height:
-        raise ValueError(f"map data has {len(msg.data)} values, but width x height = "
-                         f"{info.width}x{info.height} = {info.width * info.height}")
+        raise ValueError(f'map data has {len(msg.data)} values, but width x height = '
+                         f'{info.width}x{info.height} = {info.width * info.height}')
     cells = np.frombuffer(msg.data, dtype=np.int8) if isinstance(msg.data, array.array) \
         else np.asarray(msg.data, dtype=np.int8)
     return cells.astype(np.int64).reshape(info.height, info.width)[::-1].copy()
@@ -90,26 +92,35 @@ def grid_to_occupancy_grid(grid: np.ndarray, header: Header, info: MapMetaData |
     `info` defaults to map_info(grid.shape) (1 m cells, origin at 0, 0)."""
     grid = np.asarray(grid)
     if grid.min(initial=0) < -128 or grid.max(initial=0) > 127:
-        raise ValueError("entity indices must fit an OccupancyGrid cell (int8)")
+        raise ValueError('entity indices must fit an OccupancyGrid cell (int8)')
     msg = OccupancyGrid(header=header, info=info if info is not None else map_info(grid.shape))
-    msg.data = array.array("b", grid[::-1].astype(np.int8).tobytes())
+    msg.data = array.array('b', grid[::-1].astype(np.int8).tobytes())
     return msg
 
 
 def _scaled_grid(percent: np.ndarray, header: Header, info: MapMetaData) -> OccupancyGrid:
     msg = OccupancyGrid(header=header, info=info)
-    msg.data = array.array("b", np.rint(percent)[::-1].astype(np.int8).tobytes())
+    msg.data = array.array('b', np.rint(percent)[::-1].astype(np.int8).tobytes())
     return msg
 
 
-def value_map_to_occupancy_grid(values: np.ndarray, header: Header, info: MapMetaData
-                                ) -> OccupancyGrid:
-    """A value map (row 0 = north) -> OccupancyGrid, min..max scaled to 0..100 (a constant
-    map is all 0), for RViz's map display."""
+def value_map_to_occupancy_grid(values: np.ndarray, header: Header, info: MapMetaData,
+                                encoding: str = 'display') -> OccupancyGrid:
+    """A value map (row 0 = north) -> OccupancyGrid, min..max scaled to 0..100.
+
+    `display`: the best cell is 100, the worst 0 (a constant map is all 0), for a colour
+    ramp in RViz. `cost`: the reverse, best 0 and worst 100 (a constant map is all 0), as a
+    costmap reads cells (100 = lethal), so a planner is drawn to the goal, not kept out.
+    """
+    if encoding not in VALUE_MAP_ENCODINGS:
+        raise ValueError(f'unknown value map encoding {encoding!r}; use one of '
+                         f"{', '.join(VALUE_MAP_ENCODINGS)}")
     values = np.asarray(values, dtype=np.float64)
-    low, span = values.min(), np.ptp(values)
-    percent = (values - low) / span * PERCENT if span > 0 else np.zeros_like(values)
-    return _scaled_grid(percent, header, info)
+    low, high, span = values.min(), values.max(), np.ptp(values)
+    if span == 0:
+        return _scaled_grid(np.zeros_like(values), header, info)
+    scaled = (values - low) if encoding == 'display' else (high - values)
+    return _scaled_grid(scaled / span * PERCENT, header, info)
 
 
 def magnitude_to_occupancy_grid(values: np.ndarray, header: Header, info: MapMetaData
@@ -127,10 +138,10 @@ def value_map_to_float32_multiarray(values: np.ndarray) -> Float32MultiArray:
     values = np.asarray(values, dtype=np.float32)[::-1]
     height, width = values.shape
     msg = Float32MultiArray()
-    msg.layout.dim = [MultiArrayDimension(label="height", size=height, stride=height * width),
-                      MultiArrayDimension(label="width", size=width, stride=width)]
+    msg.layout.dim = [MultiArrayDimension(label='height', size=height, stride=height * width),
+                      MultiArrayDimension(label='width', size=width, stride=width)]
     msg.layout.data_offset = 0
-    msg.data = array.array("f", np.ascontiguousarray(values).tobytes())
+    msg.data = array.array('f', np.ascontiguousarray(values).tobytes())
     return msg
 
 
@@ -143,7 +154,7 @@ def cell_centre(cell: tuple[int, int], info: MapMetaData) -> tuple[float, float,
     """(x, y, z) in the map frame of the centre of data-set cell (row, col), row 0 = north."""
     row, col = cell
     if not (0 <= row < info.height and 0 <= col < info.width):
-        raise ValueError(f"cell {cell} is outside the {info.height}x{info.width} map")
+        raise ValueError(f'cell {cell} is outside the {info.height}x{info.width} map')
     local = np.array([(col + 0.5) * info.resolution,
                       (info.height - 1 - row + 0.5) * info.resolution, 0.0])
     p = info.origin.position
@@ -153,8 +164,11 @@ def cell_centre(cell: tuple[int, int], info: MapMetaData) -> tuple[float, float,
 
 def cell_to_pose(cell: tuple[int, int], info: MapMetaData, frame_id: str,
                  stamp: Time) -> PoseStamped:
-    """A goal at the centre of data-set cell (row, col). Orientation is the identity: the
-    instruction names a place, not a heading."""
+    """A goal at the centre of data-set cell (row, col), stamped `stamp`.
+
+    Orientation is the identity in `frame_id` (facing the frame's +x, not the grid's east
+    when the origin is rotated): the instruction names a place, not a heading.
+    """
     pose = PoseStamped()
     pose.header.frame_id, pose.header.stamp = frame_id, stamp
     pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = cell_centre(cell, info)

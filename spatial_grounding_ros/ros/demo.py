@@ -1,8 +1,12 @@
 """The closed-loop demo: the gridworld and grounder nodes run as real processes in a namespace
 of their own; the grounder answers each episode's instruction with a goal_pose, the gridworld
-walks its agent there cell by cell. This process watches the topics, records every one of them
-to an MCAP bag, prints one line per episode and a summary (also computed back from the bag
-with eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+walks its agent there cell by cell. A recorder in a thread of its own records every topic to
+an MCAP bag (log_time at reception, whatever this thread is doing); this thread watches the
+topics, prints one line per episode and a summary (also computed back from the bag with
+eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+
+The gridworld publishes its first episode only once the grounder, the recorder and the
+watcher all subscribe to `instruction`, so each hears it live: no episode is restarted.
 """
 from __future__ import annotations
 
@@ -26,23 +30,23 @@ from ..bags import evaluate_bag
 from ..entities import PUDDLEWORLD
 from ..plots import plot_grounding
 from . import convert
-from .bag_recorder import BagRecorder
+from .bag_recorder import RecordingThread
 from .gridworld_node import LATCHED, STEPS
 from .node_support import stop_processes
 
 RECORDED = {  # topic -> type; the first six are latched
-    "entity_map": "nav_msgs/msg/OccupancyGrid", "instruction": "std_msgs/msg/String",
-    "true_goal": "geometry_msgs/msg/PoseStamped",
-    "true_value_map": "std_msgs/msg/Float32MultiArray",
-    "true_reward_map": "std_msgs/msg/Float32MultiArray",
-    "value_map_raw": "std_msgs/msg/Float32MultiArray",
-    "value_map": "nav_msgs/msg/OccupancyGrid", "relation_map": "nav_msgs/msg/OccupancyGrid",
-    "goal_pose": "geometry_msgs/msg/PoseStamped", "agent_pose": "geometry_msgs/msg/PoseStamped",
-    "reward": "std_msgs/msg/Float32", "terminated": "std_msgs/msg/Bool",
-    "diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    'entity_map': 'nav_msgs/msg/OccupancyGrid', 'instruction': 'std_msgs/msg/String',
+    'true_goal': 'geometry_msgs/msg/PoseStamped',
+    'true_value_map': 'std_msgs/msg/Float32MultiArray',
+    'true_reward_map': 'std_msgs/msg/Float32MultiArray',
+    'value_map_raw': 'std_msgs/msg/Float32MultiArray',
+    'value_map': 'nav_msgs/msg/OccupancyGrid', 'relation_map': 'nav_msgs/msg/OccupancyGrid',
+    'goal_pose': 'geometry_msgs/msg/PoseStamped', 'agent_pose': 'geometry_msgs/msg/PoseStamped',
+    'reward': 'std_msgs/msg/Float32', 'terminated': 'std_msgs/msg/Bool',
+    'diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
 }
-LATCHED_TOPICS = {"entity_map", "instruction", "true_goal", "true_value_map", "true_reward_map",
-                  "value_map_raw", "value_map", "relation_map"}
+LATCHED_TOPICS = {'entity_map', 'instruction', 'true_goal', 'true_value_map', 'true_reward_map',
+                  'value_map_raw', 'value_map', 'relation_map'}
 
 
 def executable(name: str) -> list[str]:
@@ -50,15 +54,15 @@ def executable(name: str) -> list[str]:
     script = Path(sys.executable).parent / name
     if script.is_file():
         return [str(script)]
-    module = {"gridworld": "gridworld_node", "grounder": "grounder_node"}[name]
-    return [sys.executable, "-m", f"spatial_grounding_ros.ros.{module}"]
+    module = {'gridworld': 'gridworld_node', 'grounder': 'grounder_node'}[name]
+    return [sys.executable, '-m', f'spatial_grounding_ros.ros.{module}']
 
 
 class DemoWatcher(Node):
     """Follows one episode at a time: the goal the grounder sent, the agent's moves."""
 
     def __init__(self, namespace: str):
-        super().__init__("demo_watcher", namespace=namespace)
+        super().__init__('demo_watcher', namespace=namespace)
         self.goals: list[PoseStamped] = []
         self.poses: list[PoseStamped] = []
         self.rewards: list[float] = []
@@ -68,27 +72,32 @@ class DemoWatcher(Node):
         self.values: Float32MultiArray | None = None
         self.relation: OccupancyGrid | None = None
         self.true_goal: PoseStamped | None = None
-        self.instruction = ""
-        self.create_subscription(PoseStamped, "goal_pose", self.goals.append, 10)
-        self.create_subscription(PoseStamped, "agent_pose", self.poses.append, STEPS)
-        self.create_subscription(Float32, "reward", lambda m: self.rewards.append(m.data), STEPS)
-        self.create_subscription(Bool, "terminated", self.on_terminated, STEPS)
-        self.create_subscription(OccupancyGrid, "entity_map",
-                                 lambda m: setattr(self, "map_msg", m), LATCHED)
-        self.create_subscription(Float32MultiArray, "value_map_raw",
-                                 lambda m: setattr(self, "values", m), LATCHED)
-        self.create_subscription(OccupancyGrid, "relation_map",
-                                 lambda m: setattr(self, "relation", m), LATCHED)
-        self.create_subscription(String, "instruction",
-                                 lambda m: setattr(self, "instruction", m.data), LATCHED)
-        self.create_subscription(PoseStamped, "true_goal",
-                                 lambda m: setattr(self, "true_goal", m), LATCHED)
-        self.next_client = self.create_client(Trigger, "next_episode")
-        self.reset_client = self.create_client(Trigger, "reset_episode")
+        self.instruction = ''
+        self.create_subscription(PoseStamped, 'goal_pose', self.goals.append, 10)
+        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STEPS)
+        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STEPS)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
+        self.create_subscription(OccupancyGrid, 'entity_map',
+                                 lambda m: setattr(self, 'map_msg', m), LATCHED)
+        self.create_subscription(Float32MultiArray, 'value_map_raw',
+                                 lambda m: setattr(self, 'values', m), LATCHED)
+        self.create_subscription(OccupancyGrid, 'relation_map',
+                                 lambda m: setattr(self, 'relation', m), LATCHED)
+        self.create_subscription(String, 'instruction',
+                                 lambda m: setattr(self, 'instruction', m.data), LATCHED)
+        self.create_subscription(PoseStamped, 'true_goal',
+                                 lambda m: setattr(self, 'true_goal', m), LATCHED)
+        self.next_client = self.create_client(Trigger, 'next_episode')
+        self.reset_client = self.create_client(Trigger, 'reset_episode')
 
     def on_terminated(self, msg: Bool) -> None:
         self.terminated_msgs += 1
         self.terminated = self.terminated or msg.data
+
+    def seen(self) -> dict[str, int]:
+        """Messages of the per-episode topics seen so far in this episode."""
+        return {'goal_pose': len(self.goals), 'agent_pose': len(self.poses),
+                'reward': len(self.rewards), 'terminated': self.terminated_msgs}
 
     def moves_complete(self) -> bool:
         """Every move seen so far (a pose after the start) has its reward and terminated flag
@@ -108,66 +117,74 @@ class DemoWatcher(Node):
         return convert.point_to_cell(pose.pose.position.x, pose.pose.position.y, self.map_msg.info)
 
 
-def spin_until(executor, condition, timeout: float, what: str) -> None:
+def spin_until(executor, condition, timeout: float, what: str, processes=()) -> None:
+    """Spin until `condition()`; TimeoutError after `timeout`, RuntimeError as soon as one of
+    `processes` ({log path: Popen}) has exited, with the last line of its log."""
     deadline = time.monotonic() + timeout
     while not condition():
+        for log, process in dict(processes).items():
+            if process.poll() is not None:
+                last = (log.read_text().strip().splitlines() or ['(no output)'])[-1]
+                raise RuntimeError(f'demo: {log.stem} exited ({process.returncode}) while '
+                                   f'waiting for {what}: {last} (see {log})')
         if time.monotonic() > deadline:
-            raise TimeoutError(f"demo: no {what} within {timeout:g} s")
+            raise TimeoutError(f'demo: no {what} within {timeout:g} s')
         executor.spin_once(timeout_sec=0.02)
 
 
-def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = "../shared/data",
+def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = '../shared/data',
              step_period: float = 0.05, step_limit: int = 40) -> dict:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    bag_path = out / "demo_bag"
+    bag_path = out / 'demo_bag'
     if bag_path.exists():
         shutil.rmtree(bag_path)
-    use_data = (Path(data_dir) / "puddleworld" / "local.p").is_file()
-    source = ["-p", "source:=pw-local", "-p", "split:=test", "-p", f"data_dir:={data_dir}"] \
-        if use_data else ["-p", "source:=generator", "-p", f"episodes:={episodes}"]
-    namespace = f"/demo_{os.getpid()}"
-    common = ["--ros-args", "-r", f"__ns:={namespace}"]
-    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": os.environ.get(
-        "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
-    processes = [
-        subprocess.Popen(executable("gridworld") + common + source + [
-            "-p", f"seed:={seed}", "-p", "order:=sequential", "-p", f"step_limit:={step_limit}",
-            "-p", f"step_period:={step_period}", "-p", "diagnostics_topic:=diagnostics"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-        subprocess.Popen(executable("grounder") + common + [
-            "-p", "diagnostics_topic:=diagnostics"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-    ]
-    print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'}) and "
-          f"grounder running in namespace {namespace}; recording to {bag_path}", flush=True)
+    use_data = (Path(data_dir) / 'puddleworld' / 'local.p').is_file()
+    source = ['-p', 'source:=pw-local', '-p', 'split:=test', '-p', f'data_dir:={data_dir}'] \
+        if use_data else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
+    namespace = f'/demo_{os.getpid()}'
+    common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', '/diagnostics:=diagnostics']
+    env = {**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
+        'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')}
     rclpy.init()
-    watcher = recorder = None
+    watcher = recording = None
+    processes, logs = [], {}
     executor = SingleThreadedExecutor()
     lines = []
+    recorded_total = {}  # topic -> messages the watcher saw, which the bag must hold too
     try:
         watcher = DemoWatcher(namespace)
-        recorder = BagRecorder(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
         executor.add_node(watcher)
-        executor.add_node(recorder)
-        spin_until(executor, lambda: watcher.reset_client.service_is_ready(), 30, "gridworld node")
-        spin_until(executor, lambda: ("spatial_grounder", namespace) in
-                   watcher.get_node_names_and_namespaces(), 60, "grounder node")
+        recording = RecordingThread(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
+        logs = {name: open(out / f'{name}.log', 'w') for name in ('grounder', 'gridworld')}
+        processes = [
+            subprocess.Popen(executable('grounder') + common, env=env,
+                             stdout=logs['grounder'], stderr=subprocess.STDOUT),
+            # the first episode waits for the instruction's three subscribers: the grounder,
+            # the recorder and the watcher
+            subprocess.Popen(executable('gridworld') + common + source + [
+                '-p', f'seed:={seed}', '-p', 'order:=sequential',
+                '-p', f'step_limit:={step_limit}', '-p', f'step_period:={step_period}',
+                '-p', 'start_after_subscribers:=3'],
+                env=env, stdout=logs['gridworld'], stderr=subprocess.STDOUT),
+        ]
+        running = {Path(logs[name].name): p for name, p in zip(('grounder', 'gridworld'),
+                                                               processes)}
+        print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'})"
+              f' and grounder running in namespace {namespace}; recording to {bag_path}',
+              flush=True)
         for k in range(episodes):
-            # the grounder takes the instruction as it is published (not the latched copy),
-            # so the first episode is restarted until the grounder's subscription has matched
-            for attempt in range(10 if k == 0 else 1):
+            if k > 0:
                 watcher.clear()
-                client = watcher.reset_client if k == 0 else watcher.next_client
-                future = client.call_async(Trigger.Request())
-                spin_until(executor, future.done, 10, "episode start")
-                try:
-                    spin_until(executor, lambda: watcher.goals and watcher.values is not None
-                               and watcher.relation is not None, 3 if k == 0 else 30, "grounding")
-                    break
-                except TimeoutError:
-                    if k > 0 or attempt == 9:
-                        raise
+                future = watcher.next_client.call_async(Trigger.Request())
+                spin_until(executor, future.done, 60, 'next episode', running)
+            else:
+                # both processes start (torch loads: slow on a busy machine), and the gridworld
+                # publishes its first episode once the three subscribers are there
+                spin_until(executor, lambda: watcher.count_subscribers(
+                    f'{namespace}/instruction') >= 3, 600, 'grounder subscription', running)
+            spin_until(executor, lambda: watcher.goals and watcher.values is not None
+                       and watcher.relation is not None, 60, 'grounding', running)
             goal = watcher.cell(watcher.goals[0])
 
             def settled() -> bool:
@@ -175,7 +192,10 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
                 return watcher.moves_complete() and (
                     watcher.terminated or at == goal or len(watcher.rewards) >= step_limit)
 
-            spin_until(executor, settled, step_limit * step_period + 10, "agent arrival")
+            spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival',
+                       running)
+            for topic, n in watcher.seen().items():
+                recorded_total[topic] = recorded_total.get(topic, 0) + n
             path = [watcher.cell(p) for p in watcher.poses]
             truth = watcher.cell(watcher.true_goal)
             error = abs(goal[0] - truth[0]) + abs(goal[1] - truth[1])
@@ -183,35 +203,45 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10 ** 6)
             values = convert.float32_multiarray_to_value_map(watcher.values)
             relation = convert.occupancy_grid_to_grid(watcher.relation, 10 ** 6).astype(float)
-            png = plot_grounding(out / f"episode_{k}.png", grid, PUDDLEWORLD, values, relation,
+            png = plot_grounding(out / f'episode_{k}.png', grid, PUDDLEWORLD, values, relation,
                                  instruction, goal, truth, path_cells=path)
             reward = float(sum(watcher.rewards))
-            outcome = ("reached the true goal" if watcher.terminated else
-                       "stopped at its goal_pose, not the true goal" if path[-1] == goal else
-                       "did not get to its goal_pose")
-            line = (f"[{k}] {instruction!r}: goal {goal}, true {truth}, "
-                    f"{outcome}, "
-                    f"Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}")
+            outcome = ('reached the true goal' if watcher.terminated else
+                       'stopped at its goal_pose, not the true goal' if path[-1] == goal else
+                       'did not get to its goal_pose')
+            line = (f'[{k}] {instruction!r}: goal {goal}, true {truth}, '
+                    f'{outcome}, '
+                    f'Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}')
             print(line, flush=True)
-            lines.append({"goal": goal, "truth": truth, "end": path[-1],
-                          "reached": watcher.terminated, "md": error, "reward": reward})
+            lines.append({'goal': goal, 'truth': truth, 'end': path[-1],
+                          'reached': watcher.terminated, 'md': error, 'reward': reward})
+        # the recorder hears what the watcher heard; wait until the bag holds it all
+        full = {t: f'{namespace}/{t}' for t in recorded_total}
+        spin_until(executor, lambda: all(recording.counts.get(full[t], 0) >= n
+                                         for t, n in recorded_total.items()), 30,
+                   'recording of the last messages')
     finally:
-        for node in (watcher, recorder):
-            if node is not None:
-                executor.remove_node(node)
-                node.destroy_node()
+        recorded = {}
+        if recording is not None:
+            recording.stop()
+            recorded = recording.counts
+        if watcher is not None:
+            executor.remove_node(watcher)
+            watcher.destroy_node()
         rclpy.try_shutdown()
         stop_processes(*processes)
-    summary = {"episodes": len(lines), "reached": sum(l["reached"] for l in lines),
-               "md": float(np.mean([l["md"] for l in lines])) if lines else None,
-               "reward": float(np.mean([l["reward"] for l in lines])) if lines else None,
-               "bag": str(bag_path), "from_bag": evaluate_bag(bag_path).metrics(),
-               "per_episode": lines}
-    bag = summary["from_bag"]
+        for log in logs.values():
+            log.close()
+    summary = {'episodes': len(lines), 'reached': sum(l['reached'] for l in lines),
+               'md': float(np.mean([l['md'] for l in lines])) if lines else None,
+               'reward': float(np.mean([l['reward'] for l in lines])) if lines else None,
+               'bag': str(bag_path), 'from_bag': evaluate_bag(bag_path).metrics(),
+               'recorded': recorded, 'per_episode': lines}
+    bag = summary['from_bag']
     print(f"summary: {summary['reached']}/{summary['episodes']} episodes reached the goal, "
           f"mean Manhattan error {summary['md']:.2f}, mean reward {summary['reward']:.2f}; "
           f"eval-bag on {bag_path}: n {bag['n']}, MD {bag['md']:.2f}"
-          + (f", PQ {bag['pq']:.3f}, MSE {bag['mse']:.3f}" if "pq" in bag else ""))
+          + (f", PQ {bag['pq']:.3f}, MSE {bag['mse']:.3f}" if 'pq' in bag else ''))
     return summary
 
 
@@ -223,10 +253,11 @@ def cmd_closed_loop_demo(args) -> int:
 def register_cli(sub) -> None:
     from ..cli import DEFAULT_DATA
 
-    d = sub.add_parser("demo", help="gridworld + grounder nodes in a closed loop, recorded to a bag")
-    d.add_argument("--episodes", type=int, default=5)
-    d.add_argument("--seed", type=int, default=7)
-    d.add_argument("--data", default=DEFAULT_DATA,
-                   help="PuddleWorld local test maps are used when this folder holds them")
-    d.add_argument("--out", default="demo_out")
+    d = sub.add_parser('demo', help='gridworld + grounder nodes in a closed loop, recorded '
+                       'to a bag')
+    d.add_argument('--episodes', type=int, default=5)
+    d.add_argument('--seed', type=int, default=7)
+    d.add_argument('--data', default=DEFAULT_DATA,
+                   help='PuddleWorld local test maps are used when this folder holds them')
+    d.add_argument('--out', default='demo_out')
     d.set_defaults(func=cmd_closed_loop_demo)

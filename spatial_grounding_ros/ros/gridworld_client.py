@@ -29,96 +29,96 @@ class GridWorldClient(Node):
     """Subscribes to a gridworld node's topics under `namespace` and counts every message."""
 
     def __init__(self, namespace: str, step_limit: int, timeout: float = 10.0):
-        super().__init__("gridworld_client", namespace=namespace)
+        super().__init__('gridworld_client', namespace=namespace)
         self.step_limit, self.timeout = step_limit, timeout
-        self.counts = {"map": 0, "instruction": 0, "pose": 0, "reward": 0, "terminated": 0}
+        self.counts = {'map': 0, 'instruction': 0, 'pose': 0, 'reward': 0, 'terminated': 0}
         self.map_msg: OccupancyGrid | None = None
-        self.instruction = ""
+        self.instruction = ''
         self.poses: list[PoseStamped] = []
         self.rewards: list[float] = []
         self.terminals: list[bool] = []
-        self.create_subscription(OccupancyGrid, "entity_map", self.on_map, LATCHED)
-        self.create_subscription(String, "instruction", self.on_instruction, LATCHED)
-        self.create_subscription(PoseStamped, "agent_pose", self.on_pose, STEPS)
-        self.create_subscription(Float32, "reward", self.on_reward, STEPS)
-        self.create_subscription(Bool, "terminated", self.on_terminated, STEPS)
-        self.action_pub = self.create_publisher(Int32, "action", STEPS)
-        self.next_client = self.create_client(Trigger, "next_episode")
+        self.create_subscription(OccupancyGrid, 'entity_map', self.on_map, LATCHED)
+        self.create_subscription(String, 'instruction', self.on_instruction, LATCHED)
+        self.create_subscription(PoseStamped, 'agent_pose', self.on_pose, STEPS)
+        self.create_subscription(Float32, 'reward', self.on_reward, STEPS)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
+        self.action_pub = self.create_publisher(Int32, 'action', STEPS)
+        self.next_client = self.create_client(Trigger, 'next_episode')
         self.steps = 0
         self.done = True
 
     def on_map(self, msg):
         self.map_msg = msg
-        self.counts["map"] += 1
+        self.counts['map'] += 1
 
     def on_instruction(self, msg):
         self.instruction = msg.data
-        self.counts["instruction"] += 1
+        self.counts['instruction'] += 1
 
     def on_pose(self, msg):
         self.poses.append(msg)
-        self.counts["pose"] += 1
+        self.counts['pose'] += 1
 
     def on_reward(self, msg):
         self.rewards.append(float(msg.data))
-        self.counts["reward"] += 1
+        self.counts['reward'] += 1
 
     def on_terminated(self, msg):
         self.terminals.append(bool(msg.data))
-        self.counts["terminated"] += 1
+        self.counts['terminated'] += 1
 
     def wait_for(self, what: str, condition) -> None:
         deadline = time.monotonic() + self.timeout
         while not condition():
             if time.monotonic() > deadline:
-                raise TimeoutError(f"no {what} from the gridworld node within {self.timeout:g} s "
-                                   f"(is it running in namespace {self.get_namespace()!r}?)")
+                raise TimeoutError(f'no {what} from the gridworld node within {self.timeout:g} s '
+                                   f'(is it running in namespace {self.get_namespace()!r}?)')
             rclpy.spin_once(self, timeout_sec=0.05)
 
     def observation(self) -> dict:
         pose = self.poses[-1].pose.position
         agent = convert.point_to_cell(pose.x, pose.y, self.map_msg.info)
         grid = convert.occupancy_grid_to_grid(self.map_msg, max_cells=10 ** 7)
-        return {"grid": grid, "instruction": self.instruction, "agent": agent}
+        return {'grid': grid, 'instruction': self.instruction, 'agent': agent}
 
     def reset(self, seed=None) -> tuple[dict, dict]:
-        self.wait_for("next_episode service", lambda: self.next_client.service_is_ready())
+        self.wait_for('next_episode service', lambda: self.next_client.service_is_ready())
         before = dict(self.counts)
         future = self.next_client.call_async(Trigger.Request())
-        self.wait_for("next_episode response", future.done)
+        self.wait_for('next_episode response', future.done)
         # a new episode republishes map, instruction and the start pose
-        self.wait_for("episode start", lambda: all(self.counts[k] > before[k]
-                                                   for k in ("map", "instruction", "pose")))
+        self.wait_for('episode start', lambda: all(self.counts[k] > before[k]
+                                                   for k in ('map', 'instruction', 'pose')))
         self.steps, self.done = 0, False
-        return self.observation(), {"steps": 0}
+        return self.observation(), {'steps': 0}
 
     def step(self, action: int):
         if self.done:
-            raise RuntimeError("the episode is over: call reset() first")
+            raise RuntimeError('the episode is over: call reset() first')
         before = dict(self.counts)
         self.action_pub.publish(Int32(data=int(action)))
-        self.wait_for("move result", lambda: all(self.counts[k] > before[k]
-                                                 for k in ("pose", "reward", "terminated")))
+        self.wait_for('move result', lambda: all(self.counts[k] > before[k]
+                                                 for k in ('pose', 'reward', 'terminated')))
         self.steps += 1
         reward, terminated = self.rewards[-1], self.terminals[-1]
         truncated = not terminated and self.steps >= self.step_limit
         self.done = terminated or truncated
-        return self.observation(), reward, terminated, truncated, {"steps": self.steps}
+        return self.observation(), reward, terminated, truncated, {'steps': self.steps}
 
 
 @contextlib.contextmanager
 def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
     """Start a gridworld node process serving `task`'s train split (or the same generated
     worlds as `train`) in a namespace of its own, and yield one client environment."""
-    namespace = f"/rl_{os.getpid()}"
+    namespace = f'/rl_{os.getpid()}'
     step_limit = cfg.step_limit or 5 * max(train.grids.shape[1:])
-    params = {"source": task, "split": "train", "data_dir": str(data_dir),
-              "episodes": len(train), "seed": seed, "order": "random",
-              "step_limit": step_limit + 1}  # the client cuts episodes off itself
-    cmd = [sys.executable, "-m", "spatial_grounding_ros.ros.gridworld_node", "--ros-args",
-           "-r", f"__ns:={namespace}", "-p", "diagnostics_topic:=diagnostics"]
+    params = {'source': task, 'split': 'train', 'data_dir': str(data_dir),
+              'episodes': len(train), 'seed': seed, 'order': 'random',
+              'step_limit': step_limit + 1}  # the client cuts episodes off itself
+    cmd = [sys.executable, '-m', 'spatial_grounding_ros.ros.gridworld_node', '--ros-args',
+           '-r', f'__ns:={namespace}', '-r', '/diagnostics:=diagnostics']
     for k, v in params.items():
-        cmd += ["-p", f"{k}:={v}"]
+        cmd += ['-p', f'{k}:={v}']
     node_process = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     started_here = not rclpy.ok()
     if started_here:

@@ -1,157 +1,293 @@
-"""The grounder node (`ros2 run spatial_grounding_ros grounder`): a thin adapter over
+"""The grounder node (`ros2 run spatial_grounding_ros grounder`): a lifecycle node over
 spatial_grounding_ros.grounder.Grounder.
 
-Holds the latest valid entity_map and instruction; grounds when an instruction arrives and a
-map is held (or when a map arrives for an instruction that is still waiting), then publishes
-goal_pose, value_map, value_map_raw, relation_map and an OK diagnostic; each accepted map gets an
-OK diagnostic too (`<node>: entity_map`, with the map's stamp). Bad input gets a
-warning, a WARN diagnostic on /diagnostics, no goal, and the node keeps running.
+Lifecycle (as Nav2's servers): configure loads and checks the checkpoint and the entity
+table and creates the topics; activate starts grounding; deactivate stops it (no goal is
+published while inactive, and the held instruction is dropped); cleanup releases the model,
+the map and the topics. With `autostart` (the default) the node configures and activates
+itself, so `ros2 run` alone works; with `autostart: false` it waits, unconfigured, for a
+lifecycle manager on `<node>/change_state`.
+
+While active it holds the latest valid entity_map and instruction; it grounds when an
+instruction arrives and a map is held (or when a map arrives for an instruction that is still
+waiting), then publishes goal_pose, value_map, value_map_raw, relation_map and an OK
+diagnostic; each accepted map gets an OK diagnostic too (`<node>: entity_map`, with the map's
+stamp). Bad input gets a warning, a WARN diagnostic on /diagnostics, no goal, and the node
+keeps running. Topic names are fixed and relative: remap them (`-r goal_pose:=...`).
 """
 from __future__ import annotations
 
 import sys
 
-import numpy as np
-import torch
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
-from rclpy.node import Node
+import numpy as np
+from rclpy.lifecycle import (LifecycleNode, LifecyclePublisher, LifecycleState,
+                             TransitionCallbackReturn)
+from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float32MultiArray, Header, String
+import torch
 
+from . import convert
 from ..checkpoints import resolve_checkpoint
 from ..entities import EntityTable
-from ..grounder import Grounder
-from . import convert
-from .node_support import report, spin
+from ..grounder import DEFAULT_CHECKPOINT, Grounder
+from .node_support import declare_parameters, Param, report, spin
 from .package_files import find_config
 
-NODE_NAME = "spatial_grounder"
-PARAMS_FILE = "grounder.yaml"
+NODE_NAME = 'spatial_grounder'
 # Like /map: a late subscriber (RViz, this node) still gets the latest map.
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
+PARAMETERS = (
+    Param('checkpoint', DEFAULT_CHECKPOINT,
+          'packaged checkpoint name (spatial_grounding_ros/checkpoints/<name>.pt) or a path '
+          'to a .pt; loaded on configure', read_only=True, non_empty=True),
+    Param('entity_table', 'entities_puddleworld.yaml',
+          'entity table naming the entity_map cell values: a file in config/ or a path; it '
+          'must be the table the checkpoint was trained on (checked on configure)',
+          read_only=True, non_empty=True),
+    Param('max_cells', 65536,
+          'larger entity maps are rejected (t-RNetAttn work and memory grow with cells x 8 '
+          'neighbours x words: a 256x256 map takes about 0.5 s and 0.4 GB)',
+          low=1, high=4096 * 4096),
+    Param('max_instruction_chars', 500, 'longer instructions are rejected', low=1, high=100000),
+    Param('reground_on_map_change', False,
+          'ground the held instruction again on each new entity_map (false: a new map is used '
+          'by the next instruction, so Nav2 does not get a new goal on every map update)'),
+    Param('value_map_encoding', 'display',
+          'value_map cells: display = best cell 100, worst 0 (a colour ramp); cost = best 0, '
+          'worst 100, as a costmap reads cells (100 = lethal)',
+          choices=convert.VALUE_MAP_ENCODINGS),
+    Param('default_frame_id', 'map',
+          "frame of the outputs when the entity_map's header.frame_id is empty",
+          non_empty=True),
+    Param('torch_threads', 1,
+          'torch intra-op threads (process-wide), set on configure: 1 keeps latency steady '
+          "next to other busy processes, 0 leaves torch's default (all cores)",
+          read_only=True, low=0, high=1024),
+    Param('autostart', True,
+          'configure and activate at start-up (false: wait for a lifecycle manager on '
+          '<node>/change_state)', read_only=True),
+)
 
-def default_parameters() -> dict:
-    """The node's parameters and defaults: config/grounder.yaml is the single source."""
-    path = find_config(PARAMS_FILE)
-    return yaml.safe_load(path.read_text())[NODE_NAME]["ros__parameters"]
 
-
-class GrounderNode(Node):
+class GrounderNode(LifecycleNode):
+    """Entity map + instruction -> goal_pose and value maps, as a managed node."""
 
     def __init__(self, **node_options):
         super().__init__(NODE_NAME, **node_options)
-        for name, value in default_parameters().items():
-            self.declare_parameter(name, value)
+        declare_parameters(self, PARAMETERS)
+        self.guard_change_state()
+        self.grounder: Grounder | None = None
+        self.configure_error = ''
+        self.active = self.autostarting = False
+        self.topics = []                        # publishers and subscriptions of configure
+        self.release_input()
+        if not self.param('autostart'):
+            self.get_logger().info(f'unconfigured: waiting for a lifecycle manager on '
+                                   f'{self.get_fully_qualified_name()}/change_state')
+            return
+        self.autostarting = True  # a failed configure is then main()'s one error line
+        try:
+            if self.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+                raise ValueError(self.configure_error)
+            self.trigger_activate()
+        finally:
+            self.autostarting = False
 
-        if self.param("torch_threads") > 0:
-            torch.set_num_threads(self.param("torch_threads"))
-        self.grounder = Grounder.from_checkpoint(self.param("checkpoint"))
-        table_path = find_config(self.param("entity_table"))
-        table = EntityTable.from_yaml(table_path)
-        if table.names != self.grounder.entities.names:
-            raise ValueError(f"entity table {table_path} ({table.domain}, {len(table)} kinds) is "
-                             f"not the one checkpoint {self.param('checkpoint')} was trained on "
-                             f"({self.grounder.entities.domain}, "
-                             f"{len(self.grounder.entities)} kinds)")
-        self.get_logger().info(f"model {self.grounder.loaded.name} from "
-                               f"{resolve_checkpoint(self.param('checkpoint'))}, "
-                               f"entity table {table_path}")
+    def param(self, name: str):
+        return self.get_parameter(name).value
 
+    def guard_change_state(self) -> None:
+        """Answer a change_state request for a transition the current state does not have
+        (activate while unconfigured, ...) with success false, as rclcpp does: rclpy raises
+        in the service callback, which would end the node's spin."""
+        service = getattr(self, '_service_change_state', None)
+        if service is None:  # made with enable_communication_interface=False
+            return
+        change_state = service.callback
+
+        def guarded(request, response):
+            try:
+                return change_state(request, response)
+            except RuntimeError as exc:  # rclpy's RCLError: the transition is not registered
+                self.get_logger().warning(
+                    f'transition {request.transition.id} {request.transition.label!r} refused '
+                    f'in state {self._state_machine.current_state[1]!r}: '
+                    f'{str(exc).split(",")[0]}')
+                response.success = False
+                return response
+
+        service.callback = guarded
+
+    def release_input(self) -> None:
         self.grid: np.ndarray | None = None     # latest valid map, row 0 = north
         self.map_msg: OccupancyGrid | None = None
         self.instruction: str | None = None     # latest valid instruction
         self.instruction_pending = False        # not yet grounded on any map
 
-        self.goal_pub = self.create_publisher(PoseStamped, self.param("goal_pose_topic"), 10)
-        self.value_map_pub = self.create_publisher(OccupancyGrid, self.param("value_map_topic"),
-                                                   LATCHED)
-        self.value_raw_pub = self.create_publisher(Float32MultiArray,
-                                                   self.param("value_map_raw_topic"), LATCHED)
-        self.relation_map_pub = self.create_publisher(OccupancyGrid,
-                                                      self.param("relation_map_topic"), LATCHED)
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray,
-                                                     self.param("diagnostics_topic"), 10)
-        self.create_subscription(OccupancyGrid, self.param("entity_map_topic"), self.on_entity_map,
-                                 LATCHED)
-        self.create_subscription(String, self.param("instruction_topic"), self.on_instruction, 10)
+    # --- lifecycle transitions
 
-    def param(self, name: str):
-        return self.get_parameter(name).value
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        try:
+            self.load_model()
+        except Exception as exc:  # noqa: BLE001 - rclpy would swallow it: say what failed
+            self.configure_error = str(exc) if isinstance(exc, (ValueError, OSError)) \
+                else f'{type(exc).__name__}: {exc}'
+            if not self.autostarting:
+                self.get_logger().error(f'configure failed: {self.configure_error}')
+            return TransitionCallbackReturn.FAILURE
+        self.goal_pub = self.create_lifecycle_publisher(PoseStamped, 'goal_pose', 10)
+        self.value_map_pub = self.create_lifecycle_publisher(OccupancyGrid, 'value_map', LATCHED)
+        self.value_raw_pub = self.create_lifecycle_publisher(Float32MultiArray, 'value_map_raw',
+                                                             LATCHED)
+        self.relation_map_pub = self.create_lifecycle_publisher(OccupancyGrid, 'relation_map',
+                                                                LATCHED)
+        # diagnostics also while inactive: they say why an instruction was not grounded
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.topics = [
+            self.goal_pub, self.value_map_pub, self.value_raw_pub, self.relation_map_pub,
+            self.diagnostics_pub,
+            self.create_subscription(OccupancyGrid, 'entity_map', self.on_entity_map, LATCHED),
+            self.create_subscription(String, 'instruction', self.on_instruction, 10)]
+        return super().on_configure(state)
+
+    def load_model(self) -> None:
+        if self.param('torch_threads') > 0:
+            torch.set_num_threads(self.param('torch_threads'))
+        grounder = Grounder.from_checkpoint(self.param('checkpoint'))
+        table_path = find_config(self.param('entity_table'))
+        table = EntityTable.from_yaml(table_path)
+        if table.names != grounder.entities.names:
+            raise ValueError(f'entity table {table_path} ({table.domain}, {len(table)} kinds) is '
+                             f"not the one checkpoint {self.param('checkpoint')} was trained on "
+                             f'({grounder.entities.domain}, {len(grounder.entities)} kinds)')
+        self.grounder = grounder
+        self.get_logger().info(f'model {grounder.loaded.name} from '
+                               f"{resolve_checkpoint(self.param('checkpoint'))}, "
+                               f'entity table {table_path}')
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.active = True
+        self.get_logger().info('active: grounding instructions')
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        # a goal from an instruction given before the pause would surprise: drop it
+        self.active = False
+        self.instruction, self.instruction_pending = None, False
+        self.get_logger().info('inactive: instructions are not grounded')
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.release()
+        return super().on_shutdown(state)
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.release()
+        return TransitionCallbackReturn.SUCCESS  # back to unconfigured
+
+    def release(self) -> None:
+        """Give back what configure took: the model, the held input, the topics."""
+        self.active = False
+        for entity in self.topics:
+            if isinstance(entity, LifecyclePublisher):
+                self.destroy_lifecycle_publisher(entity)
+            elif isinstance(entity, Publisher):
+                self.destroy_publisher(entity)
+            else:
+                self.destroy_subscription(entity)
+        self.topics = []
+        self.grounder = None
+        self.release_input()
+
+    def destroy_node(self) -> None:
+        self.release()  # as a shutdown transition would: model and topics first
+        super().destroy_node()
+
+    # --- topics
 
     def on_entity_map(self, msg: OccupancyGrid) -> None:
         try:
-            grid = convert.occupancy_grid_to_grid(msg, self.param("max_cells"))
+            grid = convert.occupancy_grid_to_grid(msg, self.param('max_cells'))
             self.grounder.check_grid(grid)
         except ValueError as exc:
             # a stale map could send the robot somewhere that no longer fits: drop it
             self.grid = self.map_msg = None
-            self.report("entity_map", DiagnosticStatus.WARN,
-                        f"entity_map rejected: {exc}; no map held until a valid one arrives")
+            self.report('entity_map', DiagnosticStatus.WARN,
+                        f'entity_map rejected: {exc}; no map held until a valid one arrives')
             return
         self.grid, self.map_msg = grid, msg
         # an OK per accepted map, naming its stamp: a client can tell that the node holds the
         # map it sent before it sends an instruction (topics are not ordered among each other)
         stamp = msg.header.stamp
-        self.report("entity_map", DiagnosticStatus.OK,
-                    f"holding a {grid.shape[0]}x{grid.shape[1]} entity_map (frame "
-                    f"{msg.header.frame_id!r}, stamp {stamp.sec}.{stamp.nanosec:09d})",
+        self.report('entity_map', DiagnosticStatus.OK,
+                    f'holding a {grid.shape[0]}x{grid.shape[1]} entity_map (frame '
+                    f'{msg.header.frame_id!r}, stamp {stamp.sec}.{stamp.nanosec:09d})',
                     stamp_sec=stamp.sec, stamp_nanosec=stamp.nanosec,
                     height=grid.shape[0], width=grid.shape[1])
-        if self.instruction is not None and (
-                self.instruction_pending or self.param("reground_on_map_change")):
+        if self.active and self.instruction is not None and (
+                self.instruction_pending or self.param('reground_on_map_change')):
             self.ground()
 
     def on_instruction(self, msg: String) -> None:
         text = msg.data
-        limit = self.param("max_instruction_chars")
+        limit = self.param('max_instruction_chars')
         try:
+            if not self.active:
+                raise ValueError('the node is inactive (activate it through '
+                                 f'{self.get_fully_qualified_name()}/change_state)')
             if not text.strip():
-                raise ValueError("instruction is empty")
+                raise ValueError('instruction is empty')
             if len(text) > limit:
-                raise ValueError(f"instruction has {len(text)} characters, more than "
-                                 f"max_instruction_chars={limit}")
+                raise ValueError(f'instruction has {len(text)} characters, more than '
+                                 f'max_instruction_chars={limit}')
             self.grounder.check_instruction(text)
         except ValueError as exc:
             self.instruction, self.instruction_pending = None, False
-            self.report("instruction", DiagnosticStatus.WARN, f"instruction rejected: {exc}")
+            self.report('instruction', DiagnosticStatus.WARN, f'instruction rejected: {exc}')
             return
         self.instruction, self.instruction_pending = text, True
         if self.grid is None:
-            self.report("instruction", DiagnosticStatus.WARN,
-                        f"no valid entity_map held yet: holding instruction {text!r} until one "
-                        "arrives")
+            self.report('instruction', DiagnosticStatus.WARN,
+                        f'no valid entity_map held yet: holding instruction {text!r} until one '
+                        'arrives')
             return
         self.ground()
 
     def ground(self) -> None:
         try:
             result = self.grounder.ground(self.grid, self.instruction)
-        except Exception as exc:  # noqa: BLE001 - e.g. out of memory in torch: report, keep running
-            self.report("grounding", DiagnosticStatus.ERROR,
-                        f"grounding {self.instruction!r} failed: {type(exc).__name__}: {exc}")
+        except Exception as exc:  # noqa: BLE001 - e.g. out of memory in torch: report, go on
+            self.report('grounding', DiagnosticStatus.ERROR,
+                        f'grounding {self.instruction!r} failed: {type(exc).__name__}: {exc}')
             return
         self.instruction_pending = False
         info = self.map_msg.info
-        header = Header(stamp=self.get_clock().now().to_msg(),
-                        frame_id=self.map_msg.header.frame_id
-                        or self.param("default_frame_id"))
+        # the map's stamp: the goal is a cell of that map, placed where the map was then
+        # (a map in odom moves with the robot; tf2 reads stamp 0 as "latest")
+        header = Header(stamp=self.map_msg.header.stamp,
+                        frame_id=self.map_msg.header.frame_id or self.param('default_frame_id'))
         # goal first: it is what a planner waits for
         self.goal_pub.publish(convert.cell_to_pose(result.goal, info, header.frame_id,
                                                    header.stamp))
-        self.value_map_pub.publish(convert.value_map_to_occupancy_grid(result.values, header,
-                                                                       info))
+        self.value_map_pub.publish(convert.value_map_to_occupancy_grid(
+            result.values, header, info, self.param('value_map_encoding')))
         self.value_raw_pub.publish(convert.value_map_to_float32_multiarray(result.values))
         self.relation_map_pub.publish(convert.magnitude_to_occupancy_grid(result.relation_map,
                                                                           header, info))
-        message = f"grounded {result.instruction!r} at cell (row, col) {result.goal}"
+        message = f'grounded {result.instruction!r} at cell (row, col) {result.goal}'
         if result.unknown_words:
-            message += f"; ignored unknown words {result.unknown_words}"
-        self.report("grounding", DiagnosticStatus.OK, message,
+            message += f'; ignored unknown words {result.unknown_words}'
+        self.report('grounding', DiagnosticStatus.OK, message,
                     goal_row=result.goal[0], goal_col=result.goal[1])
 
     def report(self, part: str, level: bytes, message: str, **values) -> None:
@@ -159,8 +295,8 @@ class GrounderNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return spin(GrounderNode, "grounder", args)
+    return spin(GrounderNode, 'grounder', args)
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     sys.exit(main())

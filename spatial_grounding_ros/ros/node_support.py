@@ -1,17 +1,133 @@
-"""What both executables share: a diagnostic that is also logged, and a main() that spins one
-node and shuts down cleanly (start-up errors are one line and exit status 1)."""
+"""What both executables share: declared and checked parameters, a diagnostic that is also
+logged, and a main() that spins one node and shuts down cleanly.
+
+Start-up errors (a bad parameter value or type, checkpoint, entity table or params file) are
+one line `<name>: error: ...` on stderr and exit status 1.
+"""
 from __future__ import annotations
 
+from dataclasses import dataclass
+import math
 import subprocess
 import sys
-from typing import Callable
+from typing import Callable, Iterable
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                SetParametersResult)
+import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from std_msgs.msg import Header
+
+# Declared by rclpy itself on every node; never reported as unknown.
+RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
+TYPE_NAMES = {bool: 'a bool', int: 'an integer', float: 'a double', str: 'a string'}
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter of a node: its default (whose Python type is the parameter's type),
+    what it means, and what values it takes."""
+
+    name: str
+    default: bool | int | float | str
+    description: str
+    read_only: bool = False       # only start-up (or a params file) can set it
+    low: float | None = None      # inclusive range of a number
+    high: float | None = None
+    choices: tuple[str, ...] = ()
+    non_empty: bool = False       # a string that must not be empty
+
+    @property
+    def type(self) -> type:
+        return type(self.default)
+
+    def constraints(self) -> str:
+        """The rule as words, for `ros2 param describe` and error messages."""
+        if self.choices:
+            return 'one of ' + ', '.join(self.choices)
+        if self.non_empty:
+            return 'not empty'
+        show = str if self.type is int else (lambda x: f'{x:g}')
+        if self.low is not None and self.high is not None:
+            return f'{show(self.low)}..{show(self.high)}'
+        if self.low is not None:
+            return f'at least {show(self.low)}'
+        return ''
+
+    def descriptor(self) -> ParameterDescriptor:
+        descriptor = ParameterDescriptor(
+            name=self.name, type=Parameter.Type.from_parameter_value(self.default).value,
+            description=self.description, read_only=self.read_only,
+            additional_constraints=self.constraints())
+        if self.type is int and self.low is not None:
+            descriptor.integer_range = [IntegerRange(
+                from_value=int(self.low), to_value=int(self.high if self.high is not None
+                                                       else 2 ** 63 - 1), step=0)]
+        elif self.type is float and self.low is not None:
+            descriptor.floating_point_range = [FloatingPointRange(
+                from_value=float(self.low),
+                to_value=float(self.high if self.high is not None else sys.float_info.max),
+                step=0.0)]
+        return descriptor
+
+    def problem(self, value) -> str | None:
+        """What is wrong with `value` for this parameter, or None."""
+        # bool is an int in Python: compare exact types
+        if type(value) is not self.type:
+            hint = ' (write 5.0, not 5)' if self.type is float and type(value) is int else ''
+            return (f'must be {TYPE_NAMES[self.type]}{hint}, got '
+                    f'{TYPE_NAMES.get(type(value), type(value).__name__)} {value!r}')
+        if self.choices and value not in self.choices:
+            return f'must be one of {", ".join(self.choices)}, got {value!r}'
+        if self.non_empty and not value.strip():
+            return 'must not be empty'
+        if self.type in (int, float):
+            if self.type is float and not math.isfinite(value):
+                return f'must be a finite number, got {value!r}'
+            if (self.low is not None and value < self.low) or (
+                    self.high is not None and value > self.high):
+                return f'must be {self.constraints()}, got {value!r}'
+        return None
+
+
+def declare_parameters(node: Node, params: Iterable[Param]) -> None:
+    """Declare `params` on `node` with descriptors and refuse bad values.
+
+    At start-up a bad value or type from a params file or `-p` raises ValueError (one line,
+    naming the parameter); later, `set_parameters` refuses it with the same reason (and
+    rclpy refuses changes to read-only parameters). Names in the node's overrides that are
+    not parameters of the node get a warning: a typo would otherwise be ignored silently.
+    """
+    params = {p.name: p for p in params}
+
+    def on_set(changes: list[Parameter]) -> SetParametersResult:
+        for change in changes:
+            spec = params.get(change.name)
+            problem = spec and spec.problem(change.value)
+            if problem:
+                return SetParametersResult(successful=False,
+                                           reason=f'parameter {change.name} {problem}')
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(on_set)
+    # rclpy keeps what --params-file, -p and parameter_overrides gave this node here; there
+    # is no public accessor for the overrides of names that are never declared
+    overrides = dict(node._parameter_overrides)
+    for spec in params.values():
+        if spec.name in overrides:
+            problem = spec.problem(overrides[spec.name].value)
+            if problem:
+                raise ValueError(f'parameter {spec.name} {problem}')
+        node.declare_parameter(spec.name, spec.default, spec.descriptor())
+    unknown = sorted(set(overrides) - set(params) - set(RCLPY_PARAMETERS))
+    if unknown:
+        node.get_logger().warning(
+            f'ignoring unknown parameter(s) {", ".join(unknown)} (from a params file or -p): '
+            f'{node.get_name()} has {", ".join(params)}')
 
 
 def report(node: Node, publisher: Publisher, part: str, level: bytes, message: str,
@@ -24,18 +140,19 @@ def report(node: Node, publisher: Publisher, part: str, level: bytes, message: s
         node.get_logger().warning(message)
     else:
         node.get_logger().error(message)
-    status = DiagnosticStatus(level=level, name=f"{node.get_fully_qualified_name()}: {part}",
-                              message=message, hardware_id="")
+    status = DiagnosticStatus(level=level, name=f'{node.get_fully_qualified_name()}: {part}',
+                              message=message, hardware_id='')
     status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
     publisher.publish(DiagnosticArray(header=Header(stamp=node.get_clock().now().to_msg()),
                                       status=[status]))
 
 
 def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
+    """Make the node, spin it until Ctrl-C or shutdown; 1 after a start-up error."""
     try:
         rclpy.init(args=args)
     except RuntimeError as exc:  # rclpy's RCLError: a missing or malformed --params-file, ...
-        print(f"{name}: error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        print(f'{name}: error: {str(exc).splitlines()[0]}', file=sys.stderr)
         return 1
     node = None
     try:
@@ -43,8 +160,8 @@ def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (ValueError, FileNotFoundError) as exc:  # bad checkpoint, table, data or config
-        print(f"{name}: error: {exc}", file=sys.stderr)
+    except (ValueError, FileNotFoundError) as exc:  # bad parameter, checkpoint, table, data
+        print(f'{name}: error: {exc}', file=sys.stderr)
         return 1
     finally:
         if node is not None:

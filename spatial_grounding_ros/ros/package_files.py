@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-PACKAGE = "spatial_grounding_ros"
+PACKAGE = 'spatial_grounding_ros'
 SOURCE_ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -25,7 +25,7 @@ def share_dirs() -> list[Path]:
             pass
     except ImportError:
         pass
-    found += [SOURCE_ROOT, Path(sys.prefix) / "share" / PACKAGE]
+    found += [SOURCE_ROOT, Path(sys.prefix) / 'share' / PACKAGE]
     return found
 
 
@@ -35,9 +35,9 @@ def find_config(name: str | Path) -> Path:
     path = Path(name).expanduser()
     if path.is_file():
         return path
-    candidates = [d / "config" / path.name for d in share_dirs()]
+    candidates = [d / 'config' / path.name for d in share_dirs()]
     for candidate in candidates:
         if candidate.is_file():
             return candidate
-    raise FileNotFoundError(f"{name}: config file not found (looked in "
+    raise FileNotFoundError(f'{name}: config file not found (looked in '
                             f"{', '.join(str(c.parent) for c in candidates)})")
