@@ -88,7 +88,8 @@ def readme_section(heading: str) -> str:
 
 @pytest.mark.parametrize("heading, results_file", [("Results: value maps", "value_map.md"),
                                                    ("Results: RL", "rl.md"),
-                                                   ("Results: clear references", "suite.md")])
+                                                   ("Results: clear references", "suite.md"),
+                                                   ("Results: clear references", "ablation.md")])
 def test_readme_table_is_the_results_file(heading, results_file):
     """The table under the README heading with results/<file>'s header is that file's table
     cell for cell (and the file's caption line is there too): what `make reproduce` wrote is
