@@ -7,6 +7,7 @@ occurs at least twice in PuddleWorld or ISI train (misspellings map to the right
 word the tables miss leaves that mirrored example mislabeled, so the tables err on
 completeness. Some direction words also have non-directional uses ("pick up", "right next
 to"); NOT_DIRECTIONS keeps those as they are."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -25,40 +26,120 @@ def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:
 
 # Mirror columns: west <-> east. Misspellings map to the correct opposite.
 SWAP_LEFT_RIGHT = _pairs(
-    ("left", "right"), ("leftmost", "rightmost"), ("west", "east"), ("western", "eastern"),
-    ("westernmost", "easternmost"), ("westmost", "eastmost"), ("eastermost", "westernmost"),
-    ("eaternmost", "westernmost"), ("northwest", "northeast"), ("southwest", "southeast"),
-    ("northwestern", "northeastern"), ("southwestern", "southeastern"),
-    ("northwesternmost", "northeasternmost"), ("southwesternmost", "southeasternmost"),
-    ("lefthand", "righthand"), ("westward", "eastward"), ("westermost", "easternmost"),
-    ("eastenmost", "westernmost"), ("mosteastern", "mostwestern"), ("topright", "topleft"),
-    ("bottomright", "bottomleft"))
+    ('left', 'right'),
+    ('leftmost', 'rightmost'),
+    ('west', 'east'),
+    ('western', 'eastern'),
+    ('westernmost', 'easternmost'),
+    ('westmost', 'eastmost'),
+    ('eastermost', 'westernmost'),
+    ('eaternmost', 'westernmost'),
+    ('northwest', 'northeast'),
+    ('southwest', 'southeast'),
+    ('northwestern', 'northeastern'),
+    ('southwestern', 'southeastern'),
+    ('northwesternmost', 'northeasternmost'),
+    ('southwesternmost', 'southeasternmost'),
+    ('lefthand', 'righthand'),
+    ('westward', 'eastward'),
+    ('westermost', 'easternmost'),
+    ('eastenmost', 'westernmost'),
+    ('mosteastern', 'mostwestern'),
+    ('topright', 'topleft'),
+    ('bottomright', 'bottomleft'),
+)
 # Mirror rows: north <-> south.
 SWAP_UP_DOWN = _pairs(
-    ("above", "below"), ("up", "down"), ("top", "bottom"), ("topmost", "bottommost"),
-    ("upper", "lower"), ("uppermost", "lowermost"), ("highest", "lowest"), ("higher", "lower"),
-    ("north", "south"), ("northern", "southern"), ("northernmost", "southernmost"),
-    ("northmost", "southmost"), ("upmost", "downmost"), ("over", "under"),
-    ("bellow", "above"), ("beneath", "above"), ("underneath", "above"), ("bottomost", "topmost"),
-    ("southernest", "northernmost"), ("northwest", "southwest"), ("northeast", "southeast"),
-    ("northwestern", "southwestern"), ("northeastern", "southeastern"),
-    ("northeasternmost", "southeasternmost"), ("northwesternmost", "southwesternmost"),
-    ("low", "high"), ("northest", "southernmost"), ("southermost", "northernmost"),
-    ("underneeth", "above"), ("topright", "bottomright"), ("topleft", "bottomleft"),
-    ("upward", "downward"), ("upwards", "downwards"), ("tops", "bottoms"), ("atop", "below"),
-    ("ontop", "below"), ("blow", "above"), ("belows", "above"))
+    ('above', 'below'),
+    ('up', 'down'),
+    ('top', 'bottom'),
+    ('topmost', 'bottommost'),
+    ('upper', 'lower'),
+    ('uppermost', 'lowermost'),
+    ('highest', 'lowest'),
+    ('higher', 'lower'),
+    ('north', 'south'),
+    ('northern', 'southern'),
+    ('northernmost', 'southernmost'),
+    ('northmost', 'southmost'),
+    ('upmost', 'downmost'),
+    ('over', 'under'),
+    ('bellow', 'above'),
+    ('beneath', 'above'),
+    ('underneath', 'above'),
+    ('bottomost', 'topmost'),
+    ('southernest', 'northernmost'),
+    ('northwest', 'southwest'),
+    ('northeast', 'southeast'),
+    ('northwestern', 'southwestern'),
+    ('northeastern', 'southeastern'),
+    ('northeasternmost', 'southeasternmost'),
+    ('northwesternmost', 'southwesternmost'),
+    ('low', 'high'),
+    ('northest', 'southernmost'),
+    ('southermost', 'northernmost'),
+    ('underneeth', 'above'),
+    ('topright', 'bottomright'),
+    ('topleft', 'bottomleft'),
+    ('upward', 'downward'),
+    ('upwards', 'downwards'),
+    ('tops', 'bottoms'),
+    ('atop', 'below'),
+    ('ontop', 'below'),
+    ('blow', 'above'),
+    ('belows', 'above'),
+)
 
 # Uses of direction words that are not directions, so no flip changes them: the word keeps
 # its spelling after any of its `after` words, or before any of its `before` words or word
 # pairs. ISI blocks are "picked up", "lined up with" others and put "right next to" them.
 # "right above" stays a direction: PuddleWorld's "one to the right below the tree" is one.
 NOT_DIRECTIONS = {
-    "up": {"after": {"pick", "picks", "picked", "picking", "line", "lines", "lined", "lining",
-                     "match", "matches", "matched", "end", "ends", "ended"}, "before": set()},
-    "right": {"after": set(),
-              "before": {"next", "on top", "beside", "besides", "in", "at", "between", "against",
-                         "behind", "alongside", "atop", "near", "by", "where", "there", "here",
-                         "now", "adjacent", "touching", "directly", "immediately"}},
+    'up': {
+        'after': {
+            'pick',
+            'picks',
+            'picked',
+            'picking',
+            'line',
+            'lines',
+            'lined',
+            'lining',
+            'match',
+            'matches',
+            'matched',
+            'end',
+            'ends',
+            'ended',
+        },
+        'before': set(),
+    },
+    'right': {
+        'after': set(),
+        'before': {
+            'next',
+            'on top',
+            'beside',
+            'besides',
+            'in',
+            'at',
+            'between',
+            'against',
+            'behind',
+            'alongside',
+            'atop',
+            'near',
+            'by',
+            'where',
+            'there',
+            'here',
+            'now',
+            'adjacent',
+            'touching',
+            'directly',
+            'immediately',
+        },
+    },
 }
 
 
@@ -75,13 +156,15 @@ def swap_words(text: str, table: dict[str, str]) -> str:
     out = []
     for i, word in enumerate(words):
         keep = NOT_DIRECTIONS.get(word)
-        if keep and ((i > 0 and words[i - 1] in keep["after"])
-                     or " ".join(words[i + 1:i + 2]) in keep["before"]
-                     or " ".join(words[i + 1:i + 3]) in keep["before"]):
+        if keep and (
+            (i > 0 and words[i - 1] in keep['after'])
+            or ' '.join(words[i + 1:i + 2]) in keep['before']
+            or ' '.join(words[i + 1:i + 3]) in keep['before']
+        ):
             out.append(word)
         else:
             out.append(table.get(word, word))
-    return " ".join(out)
+    return ' '.join(out)
 
 
 def mirror_instruction(text: str, axes: tuple[int, ...]) -> str:
@@ -91,7 +174,9 @@ def mirror_instruction(text: str, axes: tuple[int, ...]) -> str:
     return text
 
 
-def mirror_cell(cell: tuple[int, int], shape: tuple[int, int], axes: tuple[int, ...]) -> tuple[int, int]:
+def mirror_cell(
+    cell: tuple[int, int], shape: tuple[int, int], axes: tuple[int, ...]
+) -> tuple[int, int]:
     """Where `cell` of an (H, W) map lands when the map is flipped over `axes`."""
     return tuple(n - 1 - c if a in axes else c for a, (c, n) in enumerate(zip(cell, shape)))
 
@@ -99,7 +184,7 @@ def mirror_cell(cell: tuple[int, int], shape: tuple[int, int], axes: tuple[int, 
 def mirror(data: GroundingSet, axis: int) -> GroundingSet:
     """axis 2: left-right (columns), axis 1: top-bottom (rows), of the (N, H, W) arrays."""
     if axis not in (1, 2):
-        raise ValueError(f"mirror axis must be 1 (rows) or 2 (columns), not {axis}")
+        raise ValueError(f'mirror axis must be 1 (rows) or 2 (columns), not {axis}')
     table = SWAP_TABLES[axis - 1]
 
     def flip(a: np.ndarray) -> np.ndarray:
@@ -108,9 +193,17 @@ def mirror(data: GroundingSet, axis: int) -> GroundingSet:
     goals = data.goals.copy()
     size = data.grids.shape[axis]
     goals[:, axis - 1] = size - 1 - goals[:, axis - 1]
-    return GroundingSet(f"{data.name} mirrored", data.entities, flip(data.grids),
-                        [swap_words(t, table) for t in data.instructions], flip(data.values),
-                        flip(data.rewards), flip(data.terminal), goals, list(data.worlds))
+    return GroundingSet(
+        f'{data.name} mirrored',
+        data.entities,
+        flip(data.grids),
+        [swap_words(t, table) for t in data.instructions],
+        flip(data.values),
+        flip(data.rewards),
+        flip(data.terminal),
+        goals,
+        list(data.worlds),
+    )
 
 
 def with_mirrors(data: GroundingSet) -> GroundingSet:

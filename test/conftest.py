@@ -1,5 +1,6 @@
 """Shared test set-up. Tests that need the real data sets use the `data_dir` fixture, which
 skips them (with the reason) when ../shared/data is absent."""
+
 import os
 import random
 from pathlib import Path

@@ -1,5 +1,6 @@
 """Shared by the grounder node tests: small checkpoints that need no training, and a probe
 node that talks to the grounder over DDS and keeps everything it hears."""
+
 from __future__ import annotations
 
 import itertools
@@ -39,8 +40,9 @@ def random_checkpoint(path: Path) -> Path:
     vocab = generator_vocabulary()
     cfg = ModelConfig(n_entities=len(PUDDLEWORLD), vocab_size=len(vocab))
     torch.manual_seed(0)
-    return save_checkpoint(path, MODEL, build_model(MODEL, cfg), cfg, vocab, PUDDLEWORLD,
-                           task='test: random weights')
+    return save_checkpoint(
+        path, MODEL, build_model(MODEL, cfg), cfg, vocab, PUDDLEWORLD, task='test: random weights'
+    )
 
 
 def north_east_checkpoint(path: Path) -> Path:
@@ -54,9 +56,10 @@ def north_east_checkpoint(path: Path) -> Path:
         for p in model.parameters():
             p.zero_()
         model.decoder.bias[-3:] = torch.tensor([0.1, -1.0, 0.0])  # Z2 = b1*G1 + b2*G2 + b3*J
-        model.head.convs[0].weight[0, 1, 1, 1] = 1.0              # value = Z2 (centre tap)
-    return save_checkpoint(path, MODEL, model, cfg, vocab, PUDDLEWORLD,
-                           task='test: hand-set north-east model')
+        model.head.convs[0].weight[0, 1, 1, 1] = 1.0  # value = Z2 (centre tap)
+    return save_checkpoint(
+        path, MODEL, model, cfg, vocab, PUDDLEWORLD, task='test: hand-set north-east model'
+    )
 
 
 def make_probe(context, namespace: str, grounder_name: str):
@@ -75,8 +78,7 @@ def make_probe(context, namespace: str, grounder_name: str):
     logger_name = grounder_name.strip('/').replace('/', '.')  # how /rosout names its lines
 
     class GrounderProbe(Node):
-        RECORDS = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics',
-                   'warnings')
+        RECORDS = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics', 'warnings')
 
         def __init__(self):
             super().__init__('grounder_probe', namespace=namespace, context=context)
@@ -111,16 +113,23 @@ def make_probe(context, namespace: str, grounder_name: str):
         def holds(self, message) -> bool:
             """Whether the grounder said (its OK `entity_map` diagnostic) that it holds the map
             `message`, told apart from earlier maps by its stamp."""
-            stamp = {'stamp_sec': str(message.header.stamp.sec),
-                     'stamp_nanosec': str(message.header.stamp.nanosec)}
-            return any(s.name == f'{grounder_name}: entity_map' and s.level == DiagnosticStatus.OK
-                       and stamp.items() <= {v.key: v.value for v in s.values}.items()
-                       for s in self.diagnostics)
+            stamp = {
+                'stamp_sec': str(message.header.stamp.sec),
+                'stamp_nanosec': str(message.header.stamp.nanosec),
+            }
+            return any(
+                s.name == f'{grounder_name}: entity_map'
+                and s.level == DiagnosticStatus.OK
+                and stamp.items() <= {v.key: v.value for v in s.values}.items()
+                for s in self.diagnostics
+            )
 
         def connected(self) -> bool:
-            return (self.instruction_pub.get_subscription_count() > 0
-                    and self.map_pub.get_subscription_count() > 0
-                    and self.count_publishers(f'{namespace}/goal_pose') > 0)
+            return (
+                self.instruction_pub.get_subscription_count() > 0
+                and self.map_pub.get_subscription_count() > 0
+                and self.count_publishers(f'{namespace}/goal_pose') > 0
+            )
 
         def publish_map(self, grid=None, info=None, frame_id='map', message=None):
             """Publish an entity map (a data-set grid, or a ready message); returns it. Each

@@ -5,6 +5,7 @@ iteration), from the definitions in DESIGN.md, sharing no code with the package.
 Conventions (DESIGN.md): 4 moves up, down, left, right; a move off the map stays put;
 gamma 0.9; a terminal cell's value (or score) is its reward.
 """
+
 from __future__ import annotations
 
 import math
@@ -37,9 +38,15 @@ def mean_policy_score(values, rewards, terminal, gamma: float = GAMMA, tol: floa
             policy[r, c] = [(x / sum(e), cell) for x, cell in zip(e, nexts)]
     s = [[0.0] * w for _ in range(h)]
     for _ in range(100_000):
-        new = [[rewards[r][c] if terminal[r][c] else
-                rewards[r][c] + gamma * sum(p * s[nr][nc] for p, (nr, nc) in policy[r, c])
-                for c in range(w)] for r in range(h)]
+        new = [
+            [
+                rewards[r][c]
+                if terminal[r][c]
+                else rewards[r][c] + gamma * sum(p * s[nr][nc] for p, (nr, nc) in policy[r, c])
+                for c in range(w)
+            ]
+            for r in range(h)
+        ]
         change = sum(abs(new[r][c] - s[r][c]) for r in range(h) for c in range(w))
         s = new
         if change < tol:
@@ -51,8 +58,9 @@ def policy_quality(pred, true, rewards, terminal) -> float:
     """PQ of one map: (score(pred) - score(uniform)) / (score(true) - score(uniform))."""
     uniform = np.ones(np.shape(true))
     su = mean_policy_score(uniform, rewards, terminal)
-    return ((mean_policy_score(pred, rewards, terminal) - su)
-            / (mean_policy_score(true, rewards, terminal) - su))
+    return (mean_policy_score(pred, rewards, terminal) - su) / (
+        mean_policy_score(true, rewards, terminal) - su
+    )
 
 
 def value_iteration(rewards, terminal, gamma: float = GAMMA, tol: float = 1e-9) -> np.ndarray:
@@ -61,8 +69,10 @@ def value_iteration(rewards, terminal, gamma: float = GAMMA, tol: float = 1e-9) 
     r, t = np.asarray(rewards, np.float64), np.asarray(terminal, bool)
     v = np.zeros_like(r)
     while True:
-        p = np.pad(v, ((0, 0), (1, 1), (1, 1)), mode="edge")
-        best = np.maximum.reduce([p[:, :-2, 1:-1], p[:, 2:, 1:-1], p[:, 1:-1, :-2], p[:, 1:-1, 2:]])
+        p = np.pad(v, ((0, 0), (1, 1), (1, 1)), mode='edge')
+        best = np.maximum.reduce(
+            [p[:, :-2, 1:-1], p[:, 2:, 1:-1], p[:, 1:-1, :-2], p[:, 1:-1, 2:]]
+        )
         new = np.where(t, r, r + gamma * best)
         if np.abs(new - v).max() < tol:
             return new

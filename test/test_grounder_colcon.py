@@ -2,6 +2,7 @@
 temporary workspace, the executable found through the ament index exactly as `ros2 run`
 finds it, started as a process that joins the ROS graph as `spatial_grounder`, reads its
 config from the install's share directory, and answers a request."""
+
 import glob
 import os
 import shutil
@@ -26,8 +27,19 @@ REPO = Path(__file__).resolve().parents[1]
 COLCON = Path(sys.executable).parent / 'colcon'
 NAMESPACE = unique_namespace('colcon_test')
 # what a source checkout holds besides the package: never part of a build
-NOT_SOURCE = ('.venv', '.git', 'build', 'install', 'log', 'results', 'out', 'demo_out',
-              '__pycache__', '*.egg-info', '.pytest_cache')
+NOT_SOURCE = (
+    '.venv',
+    '.git',
+    'build',
+    'install',
+    'log',
+    'results',
+    'out',
+    'demo_out',
+    '__pycache__',
+    '*.egg-info',
+    '.pytest_cache',
+)
 
 
 @pytest.fixture(scope='module')
@@ -37,9 +49,21 @@ def install_prefix(tmp_path_factory):
     workspace = tmp_path_factory.mktemp('colcon_ws')
     shutil.copytree(REPO, workspace / 'src' / PACKAGE, ignore=shutil.ignore_patterns(*NOT_SOURCE))
     build = subprocess.run(
-        [str(COLCON), 'build', '--base-paths', 'src', '--build-base', 'build',
-         '--install-base', 'install'],
-        cwd=workspace, capture_output=True, text=True, timeout=120)
+        [
+            str(COLCON),
+            'build',
+            '--base-paths',
+            'src',
+            '--build-base',
+            'build',
+            '--install-base',
+            'install',
+        ],
+        cwd=workspace,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert build.returncode == 0, build.stdout[-3000:] + build.stderr[-3000:]
     return workspace / 'install' / PACKAGE  # colcon's default isolated layout
 
@@ -66,9 +90,17 @@ def test_ament_index_finds_executables_and_share_files(install_prefix, ament_env
 
 
 # what the share directory must hold, each a copy of the source file
-INSTALLED = ('config/grounder.yaml', 'config/gridworld.yaml', 'config/entities_puddleworld.yaml',
-             'config/entities_isi.yaml', 'launch/grounder.launch.py', 'launch/demo.launch.py',
-             'rviz/spatial_grounding.rviz', 'package.xml', 'LICENSE')
+INSTALLED = (
+    'config/grounder.yaml',
+    'config/gridworld.yaml',
+    'config/entities_puddleworld.yaml',
+    'config/entities_isi.yaml',
+    'launch/grounder.launch.py',
+    'launch/demo.launch.py',
+    'rviz/spatial_grounding.rviz',
+    'package.xml',
+    'LICENSE',
+)
 
 
 def test_installed_files_are_the_checked_ones(install_prefix, ament_env):
@@ -92,8 +124,11 @@ def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, na
     Nodes. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and runs on a
     ROS 2 system (colcon test)."""
     # launch.actions, not launch: this repository's launch/ folder imports as `launch`
-    pytest.importorskip('launch.actions', reason='ROS launch is not installed (not on PyPI); '
-                        "test_ros_config checks the file's arguments, node and parameters")
+    pytest.importorskip(
+        'launch.actions',
+        reason='ROS launch is not installed (not on PyPI); '
+        "test_ros_config checks the file's arguments, node and parameters",
+    )
     pytest.importorskip('launch_ros.actions', reason='launch_ros is not installed (not on PyPI)')
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
     namespace = {}
@@ -102,22 +137,30 @@ def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, na
     assert sum(type(e).__name__ == 'Node' for e in description.entities) == nodes
 
 
-def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env,
-                                                        ros_context):
+def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env, ros_context):
     exe = Path(ament_packages.get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'grounder'
     args = ['--ros-args', '-r', f'__ns:={NAMESPACE}']
     # the packaged defaults, packaged checkpoint included: a checkpoint that cannot load fails
     # here (and the node would exit with an error), never falls back to another model
     checkpoint = resolve_checkpoint(DEFAULT_CHECKPOINT)
     load_checkpoint(checkpoint)
-    process = subprocess.Popen([str(exe), *args], env=ament_env, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
+    process = subprocess.Popen(
+        [str(exe), *args],
+        env=ament_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         graph = ros_context
         probe = graph.add(make_probe(graph.context, NAMESPACE, f'{NAMESPACE}/spatial_grounder'))
         assert graph.wait_for(
-            lambda: ('spatial_grounder', NAMESPACE) in probe.get_node_names_and_namespaces()
-            or process.poll() is not None, timeout=45)
+            lambda: (
+                ('spatial_grounder', NAMESPACE) in probe.get_node_names_and_namespaces()
+                or process.poll() is not None
+            ),
+            timeout=45,
+        )
         assert process.poll() is None, process.stdout.read()
         assert graph.wait_for(probe.connected, timeout=15)
 
@@ -131,7 +174,8 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
         expected = Grounder.from_checkpoint(str(checkpoint)).ground(grid, text).goal
         position = probe.new('goals', before)[0].pose.position
         assert (position.x, position.y) == pytest.approx(
-            convert.cell_centre(expected, convert.map_info(grid.shape))[:2])
+            convert.cell_centre(expected, convert.map_info(grid.shape))[:2]
+        )
     finally:
         returncode, output = interrupt(process)
     assert returncode == 0, output

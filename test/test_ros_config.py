@@ -4,6 +4,7 @@ with the declared default, keyed so that it applies in any namespace, and loads 
 rclpy's parser; the launch files declare the arguments the README uses and start our nodes
 with those params files; the RViz config shows our topics. Config files are found from a
 path or by name."""
+
 import ast
 from pathlib import Path
 import re
@@ -32,14 +33,16 @@ def node_parameters(node_module: str):
     return module.NODE_NAME, module.PARAMETERS
 
 
-@pytest.mark.parametrize('name, table', [('entities_puddleworld.yaml', PUDDLEWORLD),
-                                         ('entities_isi.yaml', ISI)])
+@pytest.mark.parametrize(
+    'name, table', [('entities_puddleworld.yaml', PUDDLEWORLD), ('entities_isi.yaml', ISI)]
+)
 def test_entity_tables_are_the_core_tables(name, table):
     assert EntityTable.from_yaml(REPO / 'config' / name) == table
 
 
-@pytest.mark.parametrize('file, node_module', [('grounder.yaml', 'grounder_node'),
-                                               ('gridworld.yaml', 'gridworld_node')])
+@pytest.mark.parametrize(
+    'file, node_module', [('grounder.yaml', 'grounder_node'), ('gridworld.yaml', 'gridworld_node')]
+)
 def test_params_file_holds_every_declared_parameter_for_any_namespace(file, node_module):
     """The shipped file is the node's declared defaults, keyed /**/<node> so that it applies
     under -r __ns:=/robot1 too (test_ros_parameters starts nodes that way), and rclpy's own
@@ -67,8 +70,9 @@ def test_find_config_by_path_and_by_name(tmp_path):
     own = tmp_path / 'mine.yaml'
     own.write_text('x: 1\n')
     assert find_config(own) == own
-    assert find_config('grounder.yaml').read_text() == (REPO / 'config' /
-                                                        'grounder.yaml').read_text()
+    assert (
+        find_config('grounder.yaml').read_text() == (REPO / 'config' / 'grounder.yaml').read_text()
+    )
     with pytest.raises(FileNotFoundError, match='no_such.yaml: config file not found'):
         find_config('no_such.yaml')
 
@@ -83,12 +87,25 @@ def launch_calls(name: str) -> dict:
     module-level or local assignments, os.path.join to {'join': [parts]}, dicts to dicts."""
     path = REPO / 'launch' / name
     tree = ast.parse(path.read_text(), str(path))
-    names = {t.id: node.value for node in tree.body if isinstance(node, ast.Assign)
-             for t in node.targets}
-    [function] = [n for n in tree.body if isinstance(n, ast.FunctionDef)
-                  and n.name == 'generate_launch_description']
-    names.update({t.id: node.value for node in function.body if isinstance(node, ast.Assign)
-                  for t in node.targets})
+    names = {
+        t.id: node.value
+        for node in tree.body
+        if isinstance(node, ast.Assign)
+        for t in node.targets
+    }
+    [function] = [
+        n
+        for n in tree.body
+        if isinstance(n, ast.FunctionDef) and n.name == 'generate_launch_description'
+    ]
+    names.update(
+        {
+            t.id: node.value
+            for node in function.body
+            if isinstance(node, ast.Assign)
+            for t in node.targets
+        }
+    )
 
     def value(node):
         if isinstance(node, ast.Constant):
@@ -106,8 +123,11 @@ def launch_calls(name: str) -> dict:
             func = ast.unparse(node.func)
             if func == 'os.path.join':
                 return {'join': [value(a) for a in node.args]}
-            return {'call': func, 'args': [value(a) for a in node.args],
-                    **{k.arg: value(k.value) for k in node.keywords}}
+            return {
+                'call': func,
+                'args': [value(a) for a in node.args],
+                **{k.arg: value(k.value) for k in node.keywords},
+            }
         raise AssertionError(f'unexpected launch file syntax: {ast.unparse(node)}')
 
     [ret] = [n for n in function.body if isinstance(n, ast.Return)]
@@ -132,8 +152,10 @@ def check_our_node(node: dict, executable: str, params_argument: str) -> dict:
     node declares), and the log level. Returns the overrides."""
     name, parameters = node_parameters(f'{executable}_node')
     assert node['package'] == 'spatial_grounding_ros' and node['executable'] == executable
-    assert f'{executable} = spatial_grounding_ros.ros.{executable}_node:main' in \
-        (REPO / 'setup.py').read_text()
+    assert (
+        f'{executable} = spatial_grounding_ros.ros.{executable}_node:main'
+        in (REPO / 'setup.py').read_text()
+    )
     params = yaml.safe_load(find_config(f'{executable}.yaml').read_text())
     assert node['name'] == name and set(params) == {f'/**/{name}'}
     assert node['namespace'] == lc('namespace')
@@ -154,11 +176,14 @@ def test_grounder_launch_file_arguments_and_node():
     """`ros2 launch spatial_grounding_ros grounder.launch.py namespace:=... use_sim_time:=...
     log_level:=... autostart:=... params_file:=...` reach the grounder."""
     arguments, [node] = launch_parts('grounder.launch.py')
-    assert set(arguments) == {'namespace', 'params_file', 'use_sim_time', 'autostart',
-                              'log_level'}
+    assert set(arguments) == {'namespace', 'params_file', 'use_sim_time', 'autostart', 'log_level'}
     defaults = {k: a['default_value'] for k, a in arguments.items() if k != 'params_file'}
-    assert defaults == {'namespace': '', 'use_sim_time': 'false', 'autostart': 'true',
-                        'log_level': 'info'}
+    assert defaults == {
+        'namespace': '',
+        'use_sim_time': 'false',
+        'autostart': 'true',
+        'log_level': 'info',
+    }
     check_default_params_file(arguments['params_file'], 'grounder.yaml')
     overrides = check_our_node(node, 'grounder', 'params_file')
     assert overrides == {'use_sim_time': lc('use_sim_time'), 'autostart': lc('autostart')}
@@ -166,8 +191,14 @@ def test_grounder_launch_file_arguments_and_node():
 
 def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
     arguments, nodes = launch_parts('demo.launch.py')
-    assert set(arguments) == {'namespace', 'grounder_params_file', 'gridworld_params_file',
-                              'use_sim_time', 'log_level', 'rviz'}
+    assert set(arguments) == {
+        'namespace',
+        'grounder_params_file',
+        'gridworld_params_file',
+        'use_sim_time',
+        'log_level',
+        'rviz',
+    }
     assert arguments['rviz']['default_value'] == 'false'
     check_default_params_file(arguments['grounder_params_file'], 'grounder.yaml')
     check_default_params_file(arguments['gridworld_params_file'], 'gridworld.yaml')
@@ -203,13 +234,13 @@ def test_readme_launch_lines_use_the_declared_arguments():
 
 # --- rviz/spatial_grounding.rviz
 
+
 def test_rviz_config_shows_the_maps_goal_and_agent_on_relative_topics():
     config = yaml.safe_load((REPO / 'rviz' / 'spatial_grounding.rviz').read_text())
     manager = config['Visualization Manager']
     assert manager['Global Options']['Fixed Frame'] == 'map'
     displays = {d['Topic']['Value']: d for d in manager['Displays'] if 'Topic' in d}
-    assert set(displays) == {'entity_map', 'value_map', 'relation_map', 'goal_pose',
-                             'agent_pose'}
+    assert set(displays) == {'entity_map', 'value_map', 'relation_map', 'goal_pose', 'agent_pose'}
     for topic in ('entity_map', 'value_map', 'relation_map'):
         d = displays[topic]
         assert d['Class'] == 'rviz_default_plugins/Map'

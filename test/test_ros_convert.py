@@ -1,5 +1,6 @@
 """Message conversion (ros/convert.py): orientation, scaling, layouts and input checks.
 Pure functions over message types: no node, no DDS."""
+
 import math
 
 import numpy as np
@@ -70,8 +71,9 @@ def test_value_map_is_scaled_to_0_100_in_grid_order():
     values = np.array([[3.0, -1.0], [1.0, 0.0]])  # row 0 = north
     msg = convert.value_map_to_occupancy_grid(values, HEADER, convert.map_info((2, 2)))
     assert list(msg.data) == [50, 25, 100, 0]
-    flat = convert.value_map_to_occupancy_grid(np.full((2, 2), 7.0), HEADER,
-                                               convert.map_info((2, 2)))
+    flat = convert.value_map_to_occupancy_grid(
+        np.full((2, 2), 7.0), HEADER, convert.map_info((2, 2))
+    )
     assert list(flat.data) == [0, 0, 0, 0]
 
 
@@ -107,15 +109,18 @@ def test_float32_multiarray_layout_matches_the_occupancy_grid_order():
     np.testing.assert_array_equal(convert.float32_multiarray_to_value_map(msg), values)
 
 
-@pytest.mark.parametrize('change, problem', [
-    (dict(width=0), 'width and height must be positive'),
-    (dict(height=0), 'width and height must be positive'),
-    (dict(width=300, height=300), 'more than max_cells'),
-    (dict(resolution=float('nan')), 'resolution nan'),
-    (dict(resolution=0.0), 'resolution 0.0'),
-    (dict(resolution=-1.0), 'resolution -1.0'),
-    (dict(resolution=float('inf')), 'resolution inf'),
-])
+@pytest.mark.parametrize(
+    'change, problem',
+    [
+        (dict(width=0), 'width and height must be positive'),
+        (dict(height=0), 'width and height must be positive'),
+        (dict(width=300, height=300), 'more than max_cells'),
+        (dict(resolution=float('nan')), 'resolution nan'),
+        (dict(resolution=0.0), 'resolution 0.0'),
+        (dict(resolution=-1.0), 'resolution -1.0'),
+        (dict(resolution=float('inf')), 'resolution inf'),
+    ],
+)
 def test_bad_map_info_is_named(change, problem):
     msg = convert.grid_to_occupancy_grid(np.zeros((3, 3), int), HEADER)
     for key, value in change.items():

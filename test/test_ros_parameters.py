@@ -3,6 +3,7 @@ under any namespace (the /**/<node> key), every parameter is declared with a des
 set_parameters refuses bad values and read-only ones with a reason, and an unknown name in a
 params file is a warning, not silence. (Start-up errors of the executables: the console and
 gridworld tests.)"""
+
 import pytest
 import yaml
 
@@ -33,8 +34,9 @@ def shipped_copy(tmp_path, name: str, key: str | None = None, **changes):
 
 def remote_parameters(graph, node_name: str) -> AsyncParameterClient:
     """A parameter client of `node_name` on a node of its own (answers come over DDS)."""
-    caller = graph.add(Node('parameter_caller', namespace=unique_namespace('caller'),
-                            context=graph.context))
+    caller = graph.add(
+        Node('parameter_caller', namespace=unique_namespace('caller'), context=graph.context)
+    )
     client = AsyncParameterClient(caller, node_name)
     assert client.wait_for_services(timeout_sec=30), f'no parameter services of {node_name}'
     return client
@@ -59,16 +61,27 @@ def test_shipped_grounder_params_apply_under_a_namespace(ros_context, tmp_path):
     assert grounder_node.PARAMETERS[2].default != 1234
     robot = unique_namespace('params') + '/robot1'
     path = shipped_copy(tmp_path, 'grounder.yaml', max_cells=1234, autostart=False)
-    graph.add(GrounderNode(context=graph.context, namespace=robot,
-                           cli_args=['--ros-args', '--params-file', str(path)]))
+    graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=robot,
+            cli_args=['--ros-args', '--params-file', str(path)],
+        )
+    )
     client = remote_parameters(graph, f'{robot}/spatial_grounder')
     values = remote_values(graph, client, ['max_cells', 'autostart', 'checkpoint'])
     assert values == {'max_cells': 1234, 'autostart': False, 'checkpoint': 'pw_t-rnet-attn'}
 
-    plain = shipped_copy(tmp_path, 'grounder.yaml', key='spatial_grounder', max_cells=1234,
-                         autostart=False)
-    control = graph.add(GrounderNode(context=graph.context, namespace=robot + '_control',
-                                     cli_args=['--ros-args', '--params-file', str(plain)]))
+    plain = shipped_copy(
+        tmp_path, 'grounder.yaml', key='spatial_grounder', max_cells=1234, autostart=False
+    )
+    control = graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=robot + '_control',
+            cli_args=['--ros-args', '--params-file', str(plain)],
+        )
+    )
     assert control.get_parameter('max_cells').value == 65536
 
 
@@ -76,18 +89,31 @@ def test_shipped_gridworld_params_apply_under_a_namespace(ros_context, tmp_path)
     graph = ros_context
     robot = unique_namespace('params') + '/robot1'
     path = shipped_copy(tmp_path, 'gridworld.yaml', episodes=3, seed=5, step_period=0.25)
-    graph.add(GridWorldNode(context=graph.context, namespace=robot,
-                            cli_args=['--ros-args', '--params-file', str(path)]))
+    graph.add(
+        GridWorldNode(
+            context=graph.context,
+            namespace=robot,
+            cli_args=['--ros-args', '--params-file', str(path)],
+        )
+    )
     client = remote_parameters(graph, f'{robot}/gridworld')
     assert remote_values(graph, client, ['episodes', 'seed', 'step_period']) == {
-        'episodes': 3, 'seed': 5, 'step_period': 0.25}
+        'episodes': 3,
+        'seed': 5,
+        'step_period': 0.25,
+    }
 
 
 def test_set_parameters_refuses_bad_and_read_only_values_with_a_reason(ros_context):
     graph = ros_context
     namespace = unique_namespace('set_params')
-    grounder = graph.add(GrounderNode(context=graph.context, namespace=namespace,
-                                      parameter_overrides=[Parameter('autostart', value=False)]))
+    grounder = graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=namespace,
+            parameter_overrides=[Parameter('autostart', value=False)],
+        )
+    )
     client = remote_parameters(graph, f'{namespace}/spatial_grounder')
     refused = {  # the issue's examples first: each used to succeed and change nothing
         'checkpoint': ('other.pt', 'read-only'),
@@ -103,8 +129,12 @@ def test_set_parameters_refuses_bad_and_read_only_values_with_a_reason(ros_conte
         [answer] = result(graph, client.set_parameters([Parameter(name, value=value)])).results
         assert not answer.successful and reason in answer.reason, (name, answer.reason)
         assert grounder.get_parameter(name).value == before
-    for name, value in (('max_cells', 100), ('value_map_encoding', 'cost'),
-                        ('default_frame_id', 'odom'), ('reground_on_map_change', True)):
+    for name, value in (
+        ('max_cells', 100),
+        ('value_map_encoding', 'cost'),
+        ('default_frame_id', 'odom'),
+        ('reground_on_map_change', True),
+    ):
         [answer] = result(graph, client.set_parameters([Parameter(name, value=value)])).results
         assert answer.successful, (name, answer.reason)
         assert grounder.get_parameter(name).value == value
@@ -117,16 +147,30 @@ def test_every_parameter_is_described(ros_context, module):
     graph = ros_context
     namespace = unique_namespace('describe')
     if module is grounder_node:
-        node = graph.add(GrounderNode(context=graph.context, namespace=namespace,
-                                      parameter_overrides=[Parameter('autostart', value=False)]))
+        node = graph.add(
+            GrounderNode(
+                context=graph.context,
+                namespace=namespace,
+                parameter_overrides=[Parameter('autostart', value=False)],
+            )
+        )
     else:
-        node = graph.add(GridWorldNode(context=graph.context, namespace=namespace,
-                                       parameter_overrides=[Parameter('episodes', value=2)]))
+        node = graph.add(
+            GridWorldNode(
+                context=graph.context,
+                namespace=namespace,
+                parameter_overrides=[Parameter('episodes', value=2)],
+            )
+        )
     client = remote_parameters(graph, node.get_fully_qualified_name())
     names = [p.name for p in module.PARAMETERS]
     described = result(graph, client.describe_parameters(names)).descriptors
-    types = {bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
-             float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
+    types = {
+        bool: ParameterType.PARAMETER_BOOL,
+        int: ParameterType.PARAMETER_INTEGER,
+        float: ParameterType.PARAMETER_DOUBLE,
+        str: ParameterType.PARAMETER_STRING,
+    }
     for spec, descriptor in zip(module.PARAMETERS, described):
         assert descriptor.name == spec.name and len(descriptor.description) > 10, spec.name
         assert descriptor.type == types[spec.type] and descriptor.read_only == spec.read_only
@@ -142,8 +186,13 @@ def test_every_parameter_is_described(ros_context, module):
 def test_an_unknown_name_in_a_params_file_is_a_warning(ros_context, tmp_path, capfd):
     graph = ros_context
     path = shipped_copy(tmp_path, 'grounder.yaml', autostart=False, max_cell=10)
-    graph.add(GrounderNode(context=graph.context, namespace=unique_namespace('unknown'),
-                           cli_args=['--ros-args', '--params-file', str(path)]))
+    graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=unique_namespace('unknown'),
+            cli_args=['--ros-args', '--params-file', str(path)],
+        )
+    )
     err = capfd.readouterr().err
     [line] = [line for line in err.splitlines() if 'unknown parameter' in line]
     assert '[WARN]' in line and 'ignoring unknown parameter(s) max_cell ' in line, line

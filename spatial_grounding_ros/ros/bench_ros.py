@@ -1,6 +1,7 @@
 """End-to-end ROS latency for `spatial-grounding bench`: the grounder node runs as its own
 process (as deployed); a client node in this process holds one entity map on the topic and
 times each instruction from publish() to the goal_pose callback."""
+
 from __future__ import annotations
 
 import os
@@ -50,8 +51,10 @@ class LatencyClient(Node):
         self.goal_received.set()
 
     def connected(self) -> bool:
-        return (self.instruction_pub.get_subscription_count() > 0
-                and self.count_publishers(f'{NAMESPACE}/goal_pose') > 0)
+        return (
+            self.instruction_pub.get_subscription_count() > 0
+            and self.count_publishers(f'{NAMESPACE}/goal_pose') > 0
+        )
 
     def request(self, text: str, timeout: float) -> float:
         """Seconds from publishing `text` to its goal_pose."""
@@ -63,17 +66,31 @@ class LatencyClient(Node):
         return self.received_at - sent
 
 
-def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str],
-                       requests: int, warmup: int = 20, progress=None) -> dict:
+def round_trip_latency(
+    checkpoint: str,
+    grid: np.ndarray,
+    instructions: list[str],
+    requests: int,
+    warmup: int = 20,
+    progress=None,
+) -> dict:
     """p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
     grounder process's RSS after the warm-up and at the end."""
     # loopback only, and a domain of its own unless the caller chose one (both processes)
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(1, 100)))
     node_process = subprocess.Popen(
-        [*executable('grounder'), '--ros-args', '-r', f'__ns:={NAMESPACE}',
-         '-p', f'checkpoint:={checkpoint}'],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        [
+            *executable('grounder'),
+            '--ros-args',
+            '-r',
+            f'__ns:={NAMESPACE}',
+            '-p',
+            f'checkpoint:={checkpoint}',
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     context = rclpy.Context()
     rclpy.init(context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -105,10 +122,16 @@ def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str
         context.try_shutdown()
         stop_processes(node_process)
     ms = np.array(latencies) * 1e3
-    return {'requests': requests, 'map': f'{grid.shape[0]}x{grid.shape[1]}',
-            'p50_ms': float(np.percentile(ms, 50)), 'p99_ms': float(np.percentile(ms, 99)),
-            'max_ms': float(ms.max()), 'mean_ms': float(ms.mean()),
-            'node_rss_mb_after_warmup': rss_after_warmup, 'node_rss_mb_end': rss_end,
-            'measured': 'instruction published by a client node in the bench process -> '
-                        'goal_pose received by it; the grounder node in its own process '
-                        f'(console script), one held map, {warmup} warm-up requests first'}
+    return {
+        'requests': requests,
+        'map': f'{grid.shape[0]}x{grid.shape[1]}',
+        'p50_ms': float(np.percentile(ms, 50)),
+        'p99_ms': float(np.percentile(ms, 99)),
+        'max_ms': float(ms.max()),
+        'mean_ms': float(ms.mean()),
+        'node_rss_mb_after_warmup': rss_after_warmup,
+        'node_rss_mb_end': rss_end,
+        'measured': 'instruction published by a client node in the bench process -> '
+        'goal_pose received by it; the grounder node in its own process '
+        f'(console script), one held map, {warmup} warm-up requests first',
+    }

@@ -5,6 +5,7 @@ Order: a path that exists as given; the ament index share directory
 available and the package is on AMENT_PREFIX_PATH); the source tree (an editable install,
 `pip install -e .`); the environment's share directory (a plain pip install of the wheel).
 """
+
 from __future__ import annotations
 
 import sys
@@ -19,6 +20,7 @@ def share_dirs() -> list[Path]:
     found = []
     try:
         from ament_index_python.packages import get_package_share_directory
+
         try:
             found.append(Path(get_package_share_directory(PACKAGE)))
         except (LookupError, OSError):  # not in the index, or AMENT_PREFIX_PATH unset
@@ -39,5 +41,6 @@ def find_config(name: str | Path) -> Path:
     for candidate in candidates:
         if candidate.is_file():
             return candidate
-    raise FileNotFoundError(f'{name}: config file not found (looked in '
-                            f"{', '.join(str(c.parent) for c in candidates)})")
+    raise FileNotFoundError(
+        f'{name}: config file not found (looked in {", ".join(str(c.parent) for c in candidates)})'
+    )
