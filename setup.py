@@ -1,6 +1,9 @@
-"""ament_python package: `colcon build` installs the node executables into
-lib/spatial_grounding_ros (where `ros2 run` looks); `pip install -e .` makes the same
-entry points console scripts in a virtual environment."""
+"""
+ament_python package.
+
+`colcon build` installs the node executables into lib/spatial_grounding_ros (where `ros2 run`
+looks); `pip install -e .` makes the same entry points console scripts in a virtual environment.
+"""
 
 from glob import glob
 

@@ -1,4 +1,5 @@
-"""The gridworld and the grounder in a closed loop (and RViz on request).
+"""
+The gridworld and the grounder in a closed loop (and RViz on request).
 
     ros2 launch spatial_grounding_ros demo.launch.py
     ros2 launch spatial_grounding_ros demo.launch.py rviz:=true namespace:=robot1

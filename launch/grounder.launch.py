@@ -1,4 +1,5 @@
-"""Start the grounder node with its parameters file.
+"""
+Start the grounder node with its parameters file.
 
     ros2 launch spatial_grounding_ros grounder.launch.py
     ros2 launch spatial_grounding_ros grounder.launch.py namespace:=robot1 use_sim_time:=true

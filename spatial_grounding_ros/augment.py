@@ -1,12 +1,16 @@
-"""Mirror augmentation: a map flipped left-right (or top-bottom), with the direction words of
-its instruction swapped, is another correct example: the grid MDP is symmetric under both
-flips, so the flipped value map is exactly the value map of the flipped world.
+"""
+Mirror augmentation.
+
+A map flipped left-right (or top-bottom), with the direction words of its instruction swapped, is
+another correct example: the grid MDP is symmetric under both flips, so the flipped value map is
+exactly the value map of the flipped world.
 
 Human instructions use many spellings; the tables below cover every direction word that
 occurs at least twice in PuddleWorld or ISI train (misspellings map to the right opposite). A
 word the tables miss leaves that mirrored example mislabeled, so the tables err on
 completeness. Some direction words also have non-directional uses ("pick up", "right next
-to"); NOT_DIRECTIONS keeps those as they are."""
+to"); NOT_DIRECTIONS keeps those as they are.
+"""
 
 from __future__ import annotations
 
@@ -151,7 +155,7 @@ MIRROR_IMAGES = ((1,), (0,), (1, 0))
 
 
 def swap_words(text: str, table: dict[str, str]) -> str:
-    """The instruction's tokens with each direction word replaced by its mirror image."""
+    """Return the instruction's tokens with each direction word replaced by its mirror image."""
     words = tokenize(text)
     out = []
     for i, word in enumerate(words):
@@ -168,7 +172,7 @@ def swap_words(text: str, table: dict[str, str]) -> str:
 
 
 def mirror_instruction(text: str, axes: tuple[int, ...]) -> str:
-    """The instruction of a map flipped over `axes` (map axes, see SWAP_TABLES)."""
+    """Return the instruction of a map flipped over `axes` (map axes, see SWAP_TABLES)."""
     for axis in axes:
         text = swap_words(text, SWAP_TABLES[axis])
     return text
@@ -182,7 +186,7 @@ def mirror_cell(
 
 
 def mirror(data: GroundingSet, axis: int) -> GroundingSet:
-    """axis 2: left-right (columns), axis 1: top-bottom (rows), of the (N, H, W) arrays."""
+    """Mirror the (N, H, W) arrays; axis 2: left-right (columns), axis 1: top-bottom (rows)."""
     if axis not in (1, 2):
         raise ValueError(f'mirror axis must be 1 (rows) or 2 (columns), not {axis}')
     table = SWAP_TABLES[axis - 1]
@@ -207,7 +211,7 @@ def mirror(data: GroundingSet, axis: int) -> GroundingSet:
 
 
 def with_mirrors(data: GroundingSet) -> GroundingSet:
-    """The data set plus its MIRROR_IMAGES: left-right, top-bottom and both ways (4x)."""
+    """Return the data set plus its MIRROR_IMAGES: left-right, top-bottom and both ways (4x)."""
     images = []
     for axes in MIRROR_IMAGES:
         image = data

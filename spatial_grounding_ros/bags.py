@@ -1,5 +1,8 @@
-"""rosbag2 (MCAP) bags without rclpy, with the `rosbags` library: a writer for the recorder,
-and `spatial-grounding eval-bag`, which scores the goals recorded in a bag.
+"""
+rosbag2 (MCAP) bags without rclpy, with the `rosbags` library.
+
+A writer for the recorder, and `spatial-grounding eval-bag`, which scores the goals recorded in a
+bag.
 
 Bags are written as `ros2 bag record -s mcap` of Jazzy writes them: rosbag2 metadata version
 9, `ros_distro: jazzy`, MCAP storage with the Jazzy type store's message definitions, each
@@ -17,9 +20,9 @@ MSE are computed as world.evaluate_maps does (the goal cell is the terminal one)
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import json
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +54,7 @@ REQUIRED = ('instruction', 'goal', 'truth', 'map')
 
 
 def typestore():
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
 
     return get_typestore(getattr(Stores, STORE))
 
@@ -60,7 +63,7 @@ INFINITE_NS = 2**63 - 1  # RMW_DURATION_INFINITE, as rclpy reports it
 
 
 def duration(ns: int):
-    """A rosbags QosTime of `ns` nanoseconds (infinite = 9223372036 s 854775807 ns)."""
+    """Return a rosbags QosTime of `ns` nanoseconds (infinite = 9223372036 s 854775807 ns)."""
     from rosbags.interfaces import QosTime
 
     sec, nsec = divmod(int(ns), 10**9)
@@ -68,9 +71,13 @@ def duration(ns: int):
 
 
 def qos(latched: bool, depth: int = 1000):
-    """A stand-in QoS profile for a topic whose publishers are unknown (a bag written from
+    """
+    Return a stand-in QoS profile for a topic whose publishers are unknown.
+
+    A stand-in QoS profile for a topic whose publishers are unknown (a bag written from
     messages, not recorded): transient local for latched topics, so `ros2 bag play` offers
-    them latched again."""
+    them latched again.
+    """
     from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability
 
     infinite = duration(INFINITE_NS)
@@ -88,14 +95,17 @@ def qos(latched: bool, depth: int = 1000):
 
 
 def _jazzy_writer_classes():
-    """rosbags' rosbag2 Writer and its MCAP storage, with what rosbags 0.11 leaves out and
+    """
+    Build rosbags' rosbag2 Writer and MCAP storage, completed as Jazzy's MCAP plugin writes.
+
+    rosbags' rosbag2 Writer and its MCAP storage, with what rosbags 0.11 leaves out and
     rosbag2's Jazzy MCAP plugin writes: each channel's `topic_type_hash` beside
     `offered_qos_profiles`, a message's publish_time apart from its log_time, and
     `ros_distro: jazzy` (rosbags writes `rosbags`) in the bag's metadata, both the embedded
-    copy and metadata.yaml."""
+    copy and metadata.yaml.
+    """
     from io import BytesIO
 
-    import yaml
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.rosbag2.storage_mcap import (
         Channel,
@@ -107,6 +117,7 @@ def _jazzy_writer_classes():
         write_uint32,
         write_uint64,
     )
+    import yaml
 
     class JazzyMcapWriter(McapWriter):
         publish_time: int | None = None  # of the next message; None: its log_time
@@ -167,7 +178,8 @@ def _jazzy_writer_classes():
 
 
 class BagWriter:
-    """Serialized (CDR) messages into a new rosbag2 MCAP bag directory.
+    """
+    Serialized (CDR) messages into a new rosbag2 MCAP bag directory.
 
         with BagWriter("run1") as bag:
             bag.write("/gridworld/instruction", "std_msgs/msg/String", t_ns, cdr_bytes)
@@ -210,8 +222,12 @@ class BagWriter:
         offered_qos: list | None = None,
         type_hash: str | None = None,
     ) -> None:
-        """Store one message; `timestamp_ns` is its log_time (reception), `publish_time_ns`
-        when it was sent (default: the same)."""
+        """
+        Store one message.
+
+        `timestamp_ns` is its log_time (reception), `publish_time_ns` when it was sent (default:
+        the same).
+        """
         if topic not in self.connections:
             msgdef, _ = self.store.generate_msgdef(msgtype, ros_version=2)
             self.connections[topic] = self.writer.add_connection(
@@ -236,8 +252,11 @@ class BagWriter:
 
 
 def open_bag(path: str | Path):
-    """A rosbags Reader over a bag directory (or its .mcap/.db3 file), opened. Clear errors
-    for a missing path or something that is not a readable rosbag2 bag."""
+    """
+    Return a rosbags Reader over a bag directory (or its .mcap/.db3 file), opened.
+
+    Clear errors for a missing path or something that is not a readable rosbag2 bag.
+    """
     from rosbags.rosbag2 import Reader
 
     path = Path(path)
@@ -263,8 +282,12 @@ def open_bag(path: str | Path):
 
 
 def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[str, str]:
-    """role -> topic in the bag. An absolute name must match exactly; a relative one matches
-    a topic ending in /name (any namespace). Ambiguity is an error naming the candidates."""
+    """
+    Map each role to its topic in the bag.
+
+    An absolute name must match exactly; a relative one matches a topic ending in /name (any
+    namespace). Ambiguity is an error naming the candidates.
+    """
     found = {}
     for role, name in wanted.items():
         if name.startswith('/'):
@@ -288,8 +311,12 @@ def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[st
 
 
 def _cell(x: float, y: float, info) -> tuple[int, int] | None:
-    """Data-set (row, col) (row 0 = north) of map-frame point (x, y) for an OccupancyGrid's
-    info (ros/convert.point_to_cell's convention, for planar yaw-only origins, without rclpy)."""
+    """
+    Return the data-set (row, col) of a map-frame point (x, y).
+
+    Data-set (row, col) (row 0 = north) of map-frame point (x, y) for an OccupancyGrid's
+    info (ros/convert.point_to_cell's convention, for planar yaw-only origins, without rclpy).
+    """
     o, p = info.origin.orientation, info.origin.position
     yaw = math.atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z))
     dx, dy = x - p.x, y - p.y
@@ -301,8 +328,12 @@ def _cell(x: float, y: float, info) -> tuple[int, int] | None:
 
 
 def multiarray_to_map(msg) -> np.ndarray:
-    """A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
-    row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike."""
+    """
+    Convert a Float32MultiArray in OccupancyGrid cell order to (H, W) float32, row 0 north.
+
+    A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
+    row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike.
+    """
     if len(msg.layout.dim) != 2:
         raise ValueError(
             f'expected a 2-D Float32MultiArray layout, got {len(msg.layout.dim)} dims'

@@ -1,4 +1,5 @@
-"""`spatial-grounding bench`: how fast and how lean the grounder is.
+"""
+`spatial-grounding bench`: how fast and how lean the grounder is.
 
 - forward latency of the model (one map, one instruction, no_grad) for growing map sizes;
 - throughput of one batched forward over 512 maps of 10x10;
@@ -11,10 +12,10 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 import platform
 import resource
 import time
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -33,7 +34,7 @@ TARGETS = {
 
 
 def rss_mb() -> float:
-    """This process's resident set size now (Linux /proc), in MB."""
+    """Return this process's resident set size now (Linux /proc), in MB."""
     with open('/proc/self/status') as status:
         for line in status:
             if line.startswith('VmRSS:'):
@@ -67,8 +68,12 @@ def machine() -> dict:
 
 
 def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
-    """A generated PuddleWorld-style grid of `size` x `size` with one of its own instructions
-    (objects scale with the area so large maps are not empty grass)."""
+    """
+    Return a generated PuddleWorld-style `size` x `size` grid with one of its instructions.
+
+    A generated PuddleWorld-style grid of `size` x `size` with one of its own instructions
+    (objects scale with the area so large maps are not empty grass).
+    """
     rng = np.random.default_rng(seed)
     while True:
         grid = random_grid(rng, size, n_nonunique=max(8, size * size // 12))

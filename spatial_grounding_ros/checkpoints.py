@@ -1,6 +1,10 @@
-"""Checkpoints: `torch.save` of {header, state_dict}. The header is plain data (model name,
-hyper-parameters, vocabulary, entity table, training data, metrics), so loading works with
-`weights_only=True`, and any mismatch is a clear error at load time, not a crash later."""
+"""
+Checkpoints: `torch.save` of {header, state_dict}.
+
+The header is plain data (model name, hyper-parameters, vocabulary, entity table, training data,
+metrics), so loading works with `weights_only=True`, and any mismatch is a clear error at load
+time, not a crash later.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +15,7 @@ import torch
 from torch import nn
 
 from .entities import EntityTable
-from .models import MODELS, ModelConfig, build_model
+from .models import build_model, ModelConfig, MODELS
 from .text import Vocabulary
 
 FORMAT = 'spatial_grounding_ros/1'
@@ -55,7 +59,11 @@ def save_checkpoint(
 
 
 def resolve_checkpoint(name: str | Path) -> Path:
-    """A path, or the name of a packaged checkpoint (`pw_t-rnet-attn` or `pw_t-rnet-attn.pt`)."""
+    """
+    Resolve a path, or the name of a packaged checkpoint.
+
+    Packaged names: `pw_t-rnet-attn` or `pw_t-rnet-attn.pt`.
+    """
     path = Path(name)
     if path.is_file():
         return path

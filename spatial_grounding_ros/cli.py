@@ -1,4 +1,5 @@
-"""`spatial-grounding`: one command, with subcommands.
+"""
+`spatial-grounding`: one command, with subcommands.
 
 Bad input (missing or corrupt files, unknown names, mismatched checkpoints) prints one
 line `spatial-grounding: error: ...` and exits with status 2, without a traceback.
@@ -14,7 +15,7 @@ DEFAULT_DATA = '../shared/data'
 
 
 def cmd_train(args) -> int:
-    from .training import TrainConfig, train_supervised
+    from .training import train_supervised, TrainConfig
 
     tc = TrainConfig(
         epochs=args.epochs,
@@ -91,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .datasets import SPLITS, TASKS
     from .models import MODELS
 
-    p = _Parser(prog='spatial-grounding', description=__doc__.splitlines()[0])
+    p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
 
     t = sub.add_parser('train', help="supervised training on a task's train split")
@@ -184,8 +185,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _extensions():
-    """Subcommands defined next to the code they drive: bench, RL, bags, and the closed-loop
-    demo, which needs rclpy (without it, every other subcommand still works)."""
+    """
+    Subcommands defined next to the code they drive.
+
+    bench, RL, bags, and the closed-loop demo, which needs rclpy (without it, every other
+    subcommand still works).
+    """
     from . import bags, bench, rl, suite
 
     found = [bench.register_cli, rl.register_cli, bags.register_cli, suite.register_cli]

@@ -1,5 +1,8 @@
-"""Data sets: PuddleWorld (human instructions, the paper's split), ISI blocks, and a
-train/validation split by world. All read from a path (`--data DIR`, `../shared/data`).
+"""
+Data sets.
+
+PuddleWorld (human instructions, the paper's split), ISI blocks, and a train/validation split by
+world. All read from a path (`--data DIR`, `../shared/data`).
 
 Every loader returns a `GroundingSet`: aligned arrays of grids, instructions, true value
 maps, reward and terminal maps, and goal cells. The generator of our own PuddleWorld-style
@@ -8,16 +11,16 @@ worlds lives in `generator.py`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import gzip
 import json
-import pickle
-from dataclasses import dataclass, field
 from pathlib import Path
+import pickle
 
 import numpy as np
 
 from . import world
-from .entities import ISI, PUDDLEWORLD, EntityTable
+from .entities import EntityTable, ISI, PUDDLEWORLD
 
 TASKS = ('pw-local', 'pw-global', 'pw', 'isi')
 SPLITS = ('train', 'dev', 'test')
@@ -32,8 +35,12 @@ ISI_GRID = 13
 
 @dataclass
 class GroundingSet:
-    """Aligned examples: grids (N,H,W) int64, values/rewards (N,H,W) float32, terminal
-    (N,H,W) bool, goals (N,2) int64, one instruction and one world id per example."""
+    """
+    Aligned examples.
+
+    Grids (N,H,W) int64, values/rewards (N,H,W) float32, terminal (N,H,W) bool, goals (N,2) int64,
+    one instruction and one world id per example.
+    """
 
     name: str
     entities: EntityTable
@@ -109,7 +116,8 @@ def _load_pickle(path: Path):
 
 
 def load_puddleworld(data_dir: str | Path, mode: str, split: str) -> GroundingSet:
-    """PuddleWorld `mode` in {local, global} with human instructions, the paper's split.
+    """
+    Load PuddleWorld `mode` in {local, global} with human instructions, the paper's split.
 
     `split` is train or test (PuddleWorld has no dev split: carve one with `split_by_world`).
     """
@@ -160,9 +168,13 @@ def load_puddleworld(data_dir: str | Path, mode: str, split: str) -> GroundingSe
 
 
 def load_world_instructions(data_dir: str | Path, worlds: list[str]) -> GroundingSet:
-    """The synthetic instructions stored in the world pickles (`instructions`, one per goal,
+    """
+    Return the synthetic instructions stored in the world pickles.
+
+    The synthetic instructions stored in the world pickles (`instructions`, one per goal,
     Janner et al.'s grammar), for the given PuddleWorld world ids (`pw-local/12`). Only ever
-    pass training worlds: those of test worlds are a held-out benchmark of their own."""
+    pass training worlds: those of test worlds are a held-out benchmark of their own.
+    """
     root = Path(data_dir) / 'puddleworld'
     rows = []
     for world_id in sorted(set(worlds), key=lambda w: (w.split('/')[0], int(w.split('/')[1]))):
@@ -205,14 +217,17 @@ def pw_world_ids(
 
 
 def isi_cell(coord: float) -> int:
-    """A board coordinate in [-1, 1] -> its cell 0..12 on the 13x13 grid (data README)."""
+    """Return a board coordinate in [-1, 1] -> its cell 0..12 on the 13x13 grid (data README)."""
     return int(np.clip(np.floor((coord + 1.0) / 2.0 * ISI_GRID), 0, ISI_GRID - 1))
 
 
 def layout_group(world: str) -> str:
-    """The worlds that share a layout: an ISI world id is `isi-<split>/<sequence>/<step>`
-    (load_isi), and the steps of a sequence share all but one block; any other world id is
-    a layout of its own."""
+    """
+    Return the worlds that share a layout.
+
+    An ISI world id is `isi-<split>/<sequence>/<step>` (load_isi), and the steps of a sequence
+    share all but one block; any other world id is a layout of its own.
+    """
     return world.rsplit('/', 1)[0] if world.startswith('isi-') else world
 
 
@@ -273,7 +288,7 @@ def load_isi(data_dir: str | Path, split: str) -> GroundingSet:
 
 
 def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
-    """A task's split: pw-local, pw-global, pw (both, 10x10) or isi."""
+    """Return a task's split: pw-local, pw-global, pw (both, 10x10) or isi."""
     if task not in TASKS:
         raise ValueError(f'unknown task {task!r}; use one of {", ".join(TASKS)}')
     if task == 'isi':
@@ -292,9 +307,13 @@ def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
 def split_by_world(
     data: GroundingSet, fraction: float, seed: int
 ) -> tuple[GroundingSet, GroundingSet]:
-    """Hold out `fraction` of the worlds (every instruction of a world goes to one side), so
+    """
+    Hold out `fraction` of the worlds for validation.
+
+    Hold out `fraction` of the worlds (every instruction of a world goes to one side), so
     validation never sees a training map: worlds that share a layout (an ISI sequence) go
-    to one side together."""
+    to one side together.
+    """
     groups = [layout_group(w) for w in data.worlds]
     names = sorted(set(groups))
     rng = np.random.default_rng(seed)

@@ -1,4 +1,5 @@
-"""Entity tables: what each integer in a grid means, per domain.
+"""
+Entity tables: what each integer in a grid means, per domain.
 
 A grid cell holds an entity index; the model embeds that index. The ROS layer reads the
 same tables from `config/entities_*.yaml`, so a data-set map can be published as-is.
@@ -58,8 +59,12 @@ ISI_NAMES = (
 
 @dataclass(frozen=True)
 class EntityTable:
-    """Names of the entity indices 0..n-1, which of them are obstacles (reward -1), and the
-    embedding size the paper uses for this domain."""
+    """
+    Entity names, obstacles and the paper's embedding size.
+
+    Names of the entity indices 0..n-1, which of them are obstacles (reward -1), and the
+    embedding size the paper uses for this domain.
+    """
 
     domain: str
     names: tuple[str, ...]

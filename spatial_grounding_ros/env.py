@@ -1,4 +1,5 @@
-"""The navigation environment of the paper's RL task, gymnasium-style without the dependency.
+"""
+The navigation environment of the paper's RL task, gymnasium-style without the dependency.
 
 One episode = one example of a `GroundingSet` (a map, an instruction, and that example's
 reward and terminal maps): the agent starts on a random non-terminal cell, moves with
@@ -79,8 +80,11 @@ class GridWorldEnv:
         example: int | None = None,
         start: tuple[int, int] | None = None,
     ) -> tuple[dict, dict]:
-        """Start the next episode (or example `example`), on a random non-terminal cell
-        (or `start`)."""
+        """
+        Start the next episode (or example `example`).
+
+        It starts on a random non-terminal cell (or `start`).
+        """
         if seed is not None:
             self.rng = np.random.default_rng(seed)
         if example is None:
@@ -121,8 +125,12 @@ def load_episodes(
     n: int = 100,
     seed: int = 0,
 ) -> GroundingSet:
-    """Episodes from a task split (`pw-local`, `pw-global`, `pw`, `isi`) or from the
-    generator (`generator`, `generator-local`, `generator-global`; `generator` = mixed)."""
+    """
+    Load episodes from a task split or from the generator.
+
+    Episodes from a task split (`pw-local`, `pw-global`, `pw`, `isi`) or from the
+    generator (`generator`, `generator-local`, `generator-global`; `generator` = mixed).
+    """
     if source.startswith('generator'):
         mode = source.partition('-')[2] or 'mixed'
         return generate(n, seed=seed, mode=mode)

@@ -1,4 +1,7 @@
-"""Our own PuddleWorld-style worlds and clear, unambiguous instructions, at any map size,
+"""
+Our own PuddleWorld-style worlds and clear, unambiguous instructions, at any map size.
+
+Our own PuddleWorld-style worlds and clear, unambiguous instructions, at any map size,
 so that everything (demo, tests, the simulator, the reference suite) runs with no
 downloaded data.
 
@@ -63,7 +66,7 @@ MODES = {
 
 
 def local_phrase(offset: tuple[int, int], name: str) -> str:
-    """The instruction for the cell at `offset` (d_row, d_col) from a unique object."""
+    """Return the instruction for the cell at `offset` (d_row, d_col) from a unique object."""
     dr, dc = offset
     if offset == (0, 0):
         return f'reach cell with {name}'
@@ -88,9 +91,12 @@ LOCAL_OFFSETS = [o for f in LOCAL_FAMILIES for o in FAMILY_OFFSETS[f]]
 def random_grid(
     rng: np.random.Generator, size: int | tuple[int, int] = 10, n_nonunique: int | None = None
 ) -> np.ndarray:
-    """Grass, puddles, unique objects (each at most once) and non-unique ones. A 10x10 map
-    has 1-3 puddles and 8 non-unique objects, as Janner's; larger maps get as many per
-    100 cells (puddles of the same sizes), so a 64x64 map looks like 41 10x10 ones."""
+    """
+    Grass, puddles, unique objects (each at most once) and non-unique ones.
+
+    A 10x10 map has 1-3 puddles and 8 non-unique objects, as Janner's; larger maps get as many per
+    100 cells (puddles of the same sizes), so a 64x64 map looks like 41 10x10 ones.
+    """
     h, w = (size, size) if np.isscalar(size) else size
     scale = h * w / 100
     grid = np.full((h, w), GRASS, dtype=np.int64)
@@ -141,8 +147,11 @@ def _extremes(grid: np.ndarray) -> list[tuple[str, str, tuple[int, int]]]:
 
 
 def family_goals(grid: np.ndarray, family: str) -> list[tuple[str, tuple[int, int]]]:
-    """Every (instruction, goal) of one family that `grid` supports with a unique answer.
-    (row-col and between rarely occur by chance on a random map: `plant` makes them.)"""
+    """
+    Every (instruction, goal) of one family that `grid` supports with a unique answer.
+
+    (row-col and between rarely occur by chance on a random map: `plant` makes them.)
+    """
     out = []
     if family in FAMILY_OFFSETS:
         for name, (r, c) in _unique_cells(grid).items():
@@ -185,11 +194,14 @@ def _put(grid: np.ndarray, cell: tuple[int, int], kind: int) -> None:
 def plant(
     grid: np.ndarray, family: str, rng: np.random.Generator
 ) -> tuple[str, tuple[int, int]] | None:
-    """Place objects so that a row-col or between instruction holds, in Janner's phrasing:
-    "reach cell one below triangle and two to the left of heart" (the goal's row from the
-    first object, its column from the second, both within 2 cells) and "reach rock between
-    star and circle" (two objects two cells apart in a line, the goal between them). The
-    goal is named either as "cell" or by the non-unique object placed on it."""
+    """
+    Place objects so that a row-col or between instruction holds, in Janner's phrasing.
+
+    "reach cell one below triangle and two to the left of heart" (the goal's row from the first
+    object, its column from the second, both within 2 cells) and "reach rock between star and
+    circle" (two objects two cells apart in a line, the goal between them). The goal is named
+    either as "cell" or by the non-unique object placed on it.
+    """
     h, w = grid.shape
     ref_a, ref_b = rng.choice(len(PUDDLEWORLD_UNIQUE), size=2, replace=False)
     a, b = PUDDLEWORLD_UNIQUE[ref_a], PUDDLEWORLD_UNIQUE[ref_b]
@@ -258,8 +270,11 @@ def generate(
     size: int = 10,
     families: tuple[str, ...] | None = None,
 ) -> GroundingSet:
-    """`n` examples, each a fresh world with one instruction, its goal and true value map.
-    The families (default: the mode's) take turns, so each gets n / len(families)."""
+    """
+    `n` examples, each a fresh world with one instruction, its goal and true value map.
+
+    The families (default: the mode's) take turns, so each gets n / len(families).
+    """
     if mode not in MODES:
         raise ValueError(f'unknown generator mode {mode!r}; use {", ".join(MODES)}')
     families = tuple(families or MODES[mode])
@@ -290,5 +305,5 @@ def generate(
 
 
 def family_of(world_id: str) -> str:
-    """The family of a generated example, from its world id `generated/<seed>/<family>/<i>`."""
+    """Return a generated example's family, from its world id `generated/<seed>/<family>/<i>`."""
     return world_id.split('/')[2]

@@ -1,4 +1,7 @@
-"""A plain Python API over a trained model, for users who do not want topics:
+"""
+A plain Python API over a trained model.
+
+A plain Python API over a trained model, for users who do not want topics:
 
     g = Grounder.from_checkpoint()                    # the packaged pw_t-rnet-attn
     result = g.ground(grid, "reach cell two below the westernmost rock")
@@ -14,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .checkpoints import Loaded, load_checkpoint
-from .text import UNK, tokenize
+from .checkpoints import load_checkpoint, Loaded
+from .text import tokenize, UNK
 
 DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 
@@ -49,7 +52,7 @@ class Grounder:
         self.check_instruction(instruction)
 
     def check_grid(self, grid: np.ndarray) -> None:
-        """The grid half of check(): the ROS node checks a map when it arrives."""
+        """Run the grid half of check(): the ROS node checks a map when it arrives."""
         grid = np.asarray(grid)
         if grid.ndim != 2 or 0 in grid.shape:
             raise ValueError(f'grid must be a non-empty 2-D array, got shape {grid.shape}')
@@ -61,7 +64,7 @@ class Grounder:
             )
 
     def check_instruction(self, instruction: str) -> None:
-        """The instruction half of check(): the node checks one before any map arrives."""
+        """Run the instruction half of check(): the node checks one before any map arrives."""
         if not tokenize(instruction):
             raise ValueError('instruction has no words')
         if all(i == UNK for i in self.vocab.encode(instruction)):

@@ -1,4 +1,5 @@
-"""Grounding models: t-RNetAttn (the paper's), t-RNet, t-CNN and t-UVFA, and a registry.
+"""
+Grounding models: t-RNetAttn (the paper's), t-RNet, t-CNN and t-UVFA, and a registry.
 
 Every model maps (grids (B,H,W) long, tokens (B,L) long) to a value map (B,H,W), works on
 any map size, and computes all cells, all cell pairs and all words of a batch at once.
@@ -13,15 +14,19 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields
 
 import torch
-import torch.nn.functional as F
 from torch import nn
+import torch.nn.functional as F
 
 from .text import PAD
 
 
 def neighbour_offsets(radius: int) -> list[tuple[int, int]]:
-    """The cells j around i, as (d_row, d_col): radius 1 is the paper's 8 neighbours; the
-    paper's footnote extends relations to cells further away (radius 2: 24 neighbours)."""
+    """
+    Return the cells j around i, as (d_row, d_col).
+
+    Radius 1 is the paper's 8 neighbours; the paper's footnote extends relations to cells further
+    away (radius 2: 24 neighbours).
+    """
     return [
         (dr, dc)
         for dr in range(-radius, radius + 1)
@@ -50,9 +55,8 @@ class ModelConfig:
     head: tuple = (8, 16, 32, 16, 8)  # output network: 3x3 conv channels before the last conv
     radius: int = 1  # relation neighbourhood (1: the paper's 8 neighbours)
     head_slope: float = 0.01  # negative slope of the head's ReLUs (0: plain ReLU)
-    gradient_cells: float = (
-        0.0  # G1, G2 rise by 1 every this many cells (0: span -1..1 whatever the size)
-    )
+    # G1, G2 rise by 1 every this many cells (0: span -1..1 whatever the size)
+    gradient_cells: float = 0.0
 
     # fields added after checkpoints were shipped, with the value those checkpoints had
     LATER_FIELDS = {'gradient_cells': 0.0}
@@ -72,8 +76,11 @@ class ModelConfig:
 
 
 def relation_param_count(cfg: ModelConfig) -> int:
-    """Size of h: weights of f (no biases, as the paper counts) plus 3 gradient coefficients.
-    (2k+1)*10 + 10*10 + 10*1 + 3 = 263 for k = 7, 383 for k = 13."""
+    """
+    Size of h: weights of f (no biases, as the paper counts) plus 3 gradient coefficients.
+
+    (2k+1)*10 + 10*10 + 10*1 + 3 = 263 for k = 7, 383 for k = 13.
+    """
     sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
     return sum(a * b for a, b in zip(sizes[:-1], sizes[1:])) + 3
 
@@ -96,8 +103,12 @@ class TextEncoder(nn.Module):
 
 
 class EntityEncoder(nn.Module):
-    """phi: an embedding per entity index, plus one learned 'off the map' entity that pads
-    the border so edge cells have a full neighbourhood too."""
+    """
+    phi.
+
+    An embedding per entity index, plus one learned 'off the map' entity that pads the border so
+    edge cells have a full neighbourhood too.
+    """
 
     def __init__(self, cfg: ModelConfig, pad: int = 1):
         super().__init__()
@@ -113,7 +124,11 @@ class EntityEncoder(nn.Module):
 def neighbour_index(
     height: int, width: int, radius: int = 1, device=None
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Flat indices into the grid padded by `radius`: each cell (H*W,) and its neighbours (H*W, n)."""
+    """
+    Flat indices into the grid padded by `radius`.
+
+    Each cell (H*W,) and its neighbours (H*W, n).
+    """
     padded_w = width + 2 * radius
     rows, cols = torch.meshgrid(
         torch.arange(radius, height + radius, device=device),
@@ -128,13 +143,15 @@ def neighbour_index(
 
 
 def gradient_maps(height: int, width: int, device=None, cells: float = 0.0) -> torch.Tensor:
-    """(3, H, W): G1 horizontal (west to east), G2 vertical (north to south), J ones.
+    """
+    (3, H, W): G1 horizontal (west to east), G2 vertical (north to south), J ones.
 
     cells = 0: G1 and G2 span -1..1 whatever the map size (the paper's). cells > 0: they are
     0 at the centre and rise by 1 every `cells` cells, so one row further south is worth the
     same on any map; cells = 4.5 equals the paper's on 10x10 maps. With the span fixed, a
     row is worth 0.065 on 32x32 against 0.22 on 10x10, and "southernmost" picked a rock one
-    or two rows short."""
+    or two rows short.
+    """
 
     def ramp(n):
         if cells:
@@ -147,7 +164,8 @@ def gradient_maps(height: int, width: int, device=None, cells: float = 0.0) -> t
 
 
 class OutputHead(nn.Module):
-    """tau: Z2 = b1*G1 + b2*G2 + b3*J, then 3x3 convolutions over [Z1; Z2] to the value map.
+    """
+    tau: Z2 = b1*G1 + b2*G2 + b3*J, then 3x3 convolutions over [Z1; Z2] to the value map.
 
     `channels` = () is the single convolution of the paper's text; the default stack has the
     shape of the output network of Janner et al.'s code (SimpleConv: six 3x3 convolutions,
@@ -155,7 +173,8 @@ class OutputHead(nn.Module):
     its 11x11 receptive field lets a goal's value spread over a 10x10 map. We use it at
     8, 16, 32, 16, 8 channels: on PW local (t-RNet, 100 epochs) test MSE 0.249 -> 0.190 and
     PQ 0.881 -> 0.906, at +3 ms on a 128x128 map. No final ReLU: true values go negative (puddles,
-    down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes."""
+    down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes.
+    """
 
     def __init__(self, channels: tuple = (), slope: float = 0.0, gradient_cells: float = 0.0):
         super().__init__()
@@ -180,9 +199,13 @@ class OutputHead(nn.Module):
 
 
 class TRNet(nn.Module):
-    """Text-conditioned relation network. With attention (t-RNetAttn) the relation MLP's
-    weights are decoded from h_ij = sum_k alpha_ij(k) h(k) for each cell pair; without it
-    (t-RNet) from the mean of the LSTM outputs, the same for every pair."""
+    """
+    Text-conditioned relation network.
+
+    With attention (t-RNetAttn) the relation MLP's weights are decoded from h_ij = sum_k
+    alpha_ij(k) h(k) for each cell pair; without it (t-RNet) from the mean of the LSTM outputs, the
+    same for every pair.
+    """
 
     def __init__(self, cfg: ModelConfig, attention: bool = True):
         super().__init__()
@@ -213,12 +236,14 @@ class TRNet(nn.Module):
     def relation_mlp(
         weights: list[torch.Tensor], x: torch.Tensor, attention: torch.Tensor | None
     ) -> torch.Tensor:
-        """r = W3 tanh(W2 tanh(W1 x)) over pairs x (B, N, 8, 2k+1).
+        """
+        Compute r = W3 tanh(W2 tanh(W1 x)) over pairs x (B, N, 8, 2k+1).
 
         Without attention the weights are one set per map, (B, out, in). With attention the
         pair (i, j) uses W_ij = sum_k alpha_ij(k) W(k), the weights decoded from each word k
         (B, L, out, in); W_ij x = sum_k alpha_ij(k) (W(k) x), so each layer is one matmul per
-        word and a weighted sum, never a weight matrix per pair (3x faster, same result)."""
+        word and a weighted sum, never a weight matrix per pair (3x faster, same result).
+        """
         for n, w in enumerate(weights):
             if attention is None:
                 x = torch.einsum('bnpi,boi->bnpo', x, w)
@@ -270,8 +295,12 @@ class TRNet(nn.Module):
 
 
 class TCNN(nn.Module):
-    """t-CNN (Janner et al. 2018 as in the paper's appendix): the text vector's first
-    3*3*k entries are a 3x3 kernel over the entity embeddings, giving Z1; the last 3 make Z2."""
+    """
+    t-CNN (Janner et al. 2018 as in the paper's appendix).
+
+    The text vector's first 3*3*k entries are a 3x3 kernel over the entity embeddings, giving Z1;
+    the last 3 make Z2.
+    """
 
     def __init__(self, cfg: ModelConfig):
         super().__init__()
@@ -295,8 +324,12 @@ class TCNN(nn.Module):
 
 
 class TUVFA(nn.Module):
-    """t-UVFA: a text vector [7] concatenated with a convolutional state encoding at every
-    cell, then deconvolution layers decode the value map."""
+    """
+    t-UVFA.
+
+    A text vector [7] concatenated with a convolutional state encoding at every cell, then
+    deconvolution layers decode the value map.
+    """
 
     def __init__(self, cfg: ModelConfig):
         super().__init__()

@@ -24,8 +24,12 @@ def plot_grounding(
     true_goal=None,
     path_cells=None,
 ) -> Path:
-    """Three panels: map (entity names as letters), predicted values, |Z1|; marks the
-    predicted goal (x), the true goal (o) and an agent path if given."""
+    """
+    Three panels.
+
+    Map (entity names as letters), predicted values, |Z1|; marks the predicted goal (x), the true
+    goal (o) and an agent path if given.
+    """
     fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
     h, w = grid.shape
     axes[0].imshow(np.isin(grid, entities.obstacles), cmap='Blues', vmin=0, vmax=2)

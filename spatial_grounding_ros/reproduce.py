@@ -1,23 +1,27 @@
-"""`make reproduce`: train every model on every task, evaluate on the test splits, write
-`results/value_map.json` and `results/value_map.md` (the README table), ship the
-t-RNetAttn and t-CNN checkpoints in the package, and run the reference suite on the shipped
-PuddleWorld checkpoints (`results/suite.json`, `results/suite.md`)."""
+"""
+`make reproduce`.
+
+Train every model on every task, evaluate on the test splits, write `results/value_map.json` and
+`results/value_map.md` (the README table), ship the t-RNetAttn and t-CNN checkpoints in the
+package, and run the reference suite on the shipped PuddleWorld checkpoints (`results/suite.json`,
+`results/suite.md`).
+"""
 
 from __future__ import annotations
 
 import fcntl
 import json
+from pathlib import Path
 import platform
 import shutil
 import time
-from pathlib import Path
 
 import numpy as np
 import torch
 
-from .checkpoints import PACKAGED_DIR, load_checkpoint
+from .checkpoints import load_checkpoint, PACKAGED_DIR
 from .datasets import load_task
-from .training import EPOCHS, TrainConfig, evaluate, train_supervised
+from .training import EPOCHS, evaluate, train_supervised, TrainConfig
 
 # Table 1 of the paper (value maps, test split): (MSE, PQ, MD); ISI has no PQ there.
 PAPER = {
@@ -118,7 +122,7 @@ def reproduce_value_maps(
 
 
 def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int = 0) -> dict:
-    """The reference suite on every shipped PuddleWorld checkpoint: results/suite.{json,md}."""
+    """Run the reference suite on every shipped PuddleWorld checkpoint: results/suite.{json,md}."""
     from . import suite
 
     results = {
@@ -138,8 +142,12 @@ def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int
 
 
 def merge_results(results_path: Path, row: dict) -> None:
-    """Add or replace one (task, model) row; runs of several processes (one per task) may
-    share the file, so the read-modify-write happens under a lock."""
+    """
+    Add or replace one (task, model) row.
+
+    Runs of several processes (one per task) may share the file, so the read-modify-write happens
+    under a lock.
+    """
     results_path.parent.mkdir(parents=True, exist_ok=True)
     with open(results_path.with_suffix('.lock'), 'w') as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
@@ -178,8 +186,12 @@ def reproduce_ablation(
     threads: int = 2,
     seed: int = 0,
 ) -> list[dict]:
-    """Train `model` on pw once per ABLATIONS row and score each on the suite (10x10 and
-    32x32) and the human test splits: results/ablation.json and results/ablation.md."""
+    """
+    Train `model` on pw once per ABLATIONS row and score each run.
+
+    Train `model` on pw once per ABLATIONS row and score each on the suite (10x10 and
+    32x32) and the human test splits: results/ablation.json and results/ablation.md.
+    """
     from . import suite
 
     rows = []

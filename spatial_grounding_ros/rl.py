@@ -1,5 +1,8 @@
-"""Goal navigation with RL (paper section 3.3): explore with the predicted value map, then
-fitted value iteration against a periodically synced target network. Read top to bottom.
+"""
+Goal navigation with RL (paper section 3.3).
+
+Explore with the predicted value map, then fitted value iteration against a periodically synced
+target network. Read top to bottom.
 
 The agent never sees a true value map. It sees what an environment shows (the map, the
 instruction, its cell) and the reward of each cell it enters. Value convention (world.py):
@@ -14,7 +17,8 @@ The "max over next cells" uses the known deterministic move model (world.next_ce
 4 moves, off the map stays put), as in the paper's loss. Only cells the agent entered are
 regressed. The regression is prioritized (RLConfig.priority): each visited cell's squared
 error is weighted by (|error| + 0.1)^priority, so the few goal cells found, whose targets
-stand out, are not drowned by the many wandering cells (plain mean square: priority 0). PQ and MD are then measured on the predicted maps of the test split
+stand out, are not drowned by the many wandering cells (plain mean square: priority 0). PQ
+and MD are then measured on the predicted maps of the test split
 (world.evaluate_maps), the true maps being used for that evaluation only.
 
 `--via-ros` runs the very same loop, but the episodes come from the gridworld node's topics
@@ -25,23 +29,23 @@ from __future__ import annotations
 
 import argparse
 import copy
+from dataclasses import asdict, dataclass
 import functools
 import json
-import time
-from dataclasses import asdict, dataclass
 from pathlib import Path
+import time
 
 import numpy as np
 import torch
 
 from . import world
-from .augment import MIRROR_IMAGES, mirror_cell, mirror_instruction
+from .augment import mirror_cell, MIRROR_IMAGES, mirror_instruction
 from .checkpoints import save_checkpoint
-from .datasets import TASKS, GroundingSet
+from .datasets import GroundingSet, TASKS
 from .env import GridWorldEnv, load_episodes
-from .models import MODELS, ModelConfig, build_model
+from .models import build_model, ModelConfig, MODELS
 from .text import Vocabulary
-from .training import TASK_SETTINGS, predict
+from .training import predict, TASK_SETTINGS
 
 RL_TASKS = ('pw-local', 'pw-global', 'isi')
 
@@ -63,25 +67,27 @@ class RLConfig:
     eps_start: float = 1.0  # epsilon-greedy exploration, decayed linearly ...
     eps_end: float = 0.1
     eps_fraction: float = 0.5  # ... over this fraction of the episodes
-    attention_warmup: float = (
-        0.85  # share of episodes t-RNetAttn runs with (still uniform) attention off
-    )
-    mirrors: bool | None = (
-        None  # also learn from the mirror images of each map; None: the task's (training.TASK_SETTINGS)
-    )
+    # share of episodes t-RNetAttn runs with (still uniform) attention off
+    attention_warmup: float = 0.85
+    # also learn from the mirror images of each map; None: the task's (training.TASK_SETTINGS)
+    mirrors: bool | None = None
     seed: int = 0
     threads: int = 1
 
 
 class ReplayBuffer:
-    """Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
+    """
+    Transitions (map, instruction, s, a, r, s', done).
+
+    Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
     per distinct pair. Because moves are deterministic, the cells entered in a map, with
     their observed reward and terminal flag, are all a regression step needs: `visited`,
     `reward`, `terminal` (per map, (H, W)) are kept up to date from the transitions.
 
     With `mirrors`, each map also gets its three mirror images (direction words swapped),
     and every observed cell is recorded in them too: the flipped grid MDP has the flipped
-    rewards, so the agent's own experience is reused four times without another step."""
+    rewards, so the agent's own experience is reused four times without another step.
+    """
 
     def __init__(self, shape: tuple[int, int], mirrors: bool = False):
         self.shape = shape
@@ -127,7 +133,7 @@ class ReplayBuffer:
 
     @property
     def n_observed(self) -> int:
-        """Maps the agent has played (not counting mirror images)."""
+        """Count the maps the agent has played (not counting mirror images)."""
         return len(self.key_to_id)
 
     def add(self, map_id: int, s: tuple, a: int, r: float, s2: tuple, done: bool) -> None:
@@ -179,8 +185,11 @@ def run_episodes(
     epsilon: float,
     rng: np.random.Generator,
 ) -> list[float]:
-    """One episode per environment, side by side, acting on one predicted map per episode.
-    Returns each episode's total reward."""
+    """
+    One episode per environment, side by side, acting on one predicted map per episode.
+
+    Returns each episode's total reward.
+    """
     obs = [env.reset()[0] for env in envs]
     ids = [buffer.map_id(o['grid'], o['instruction']) for o in obs]
     maps = predicted_maps(model, vocab, [o['grid'] for o in obs], [o['instruction'] for o in obs])
@@ -273,8 +282,12 @@ def train_rl(
     envs: list | None = None,
     progress: bool = True,
 ) -> tuple[Path, dict]:
-    """Train `model_name` by RL on `task`'s train split, evaluate on its test split, write
-    `out/rl_<task>_<model>.pt`. `envs` replaces the in-process environments (the ROS client)."""
+    """
+    Train `model_name` by RL on `task`'s train split and evaluate it.
+
+    Train `model_name` by RL on `task`'s train split, evaluate on its test split, write
+    `out/rl_<task>_<model>.pt`. `envs` replaces the in-process environments (the ROS client).
+    """
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
     rng = np.random.default_rng(cfg.seed)
@@ -336,8 +349,9 @@ def train_rl(
         log.append((episodes, float(np.mean(returns)), float(np.mean(losses)), epsilon))
         if progress and (len(log) % 20 == 0 or episodes >= cfg.episodes):
             print(
-                f'{task} {model_name}: {episodes} episodes, return {np.mean([l[1] for l in log[-20:]]):.2f}, '
-                f'loss {np.mean([l[2] for l in log[-20:]]):.3f}, epsilon {epsilon:.2f}, '
+                f'{task} {model_name}: {episodes} episodes, '
+                f'return {np.mean([row[1] for row in log[-20:]]):.2f}, '
+                f'loss {np.mean([row[2] for row in log[-20:]]):.3f}, epsilon {epsilon:.2f}, '
                 f'{time.perf_counter() - start:.0f} s',
                 flush=True,
             )
@@ -535,8 +549,12 @@ def reproduce_rl(
     jobs: int = 2,
     checkpoints: str = 'out',
 ) -> list[dict]:
-    """Train every (model, task) by RL in `jobs` parallel processes (one thread each), write
-    out/rl.json and out/rl.md."""
+    """
+    Train every (model, task) by RL in `jobs` parallel processes.
+
+    Train every (model, task) by RL in `jobs` parallel processes (one thread each), write
+    out/rl.json and out/rl.md.
+    """
     from concurrent.futures import ProcessPoolExecutor
 
     runs = sorted(

@@ -1,4 +1,7 @@
-"""The reference suite: does a model send the robot to the cell a clear instruction names?
+"""
+The reference suite.
+
+Does a model send the robot to the cell a clear instruction names?
 
 Generated worlds at each size, every relation family of the generator (Janner et al.'s
 synthetic grammar) in equal numbers; per family and size, HIT (the share of maps whose
@@ -30,7 +33,7 @@ DEFAULT_SIZES = (10, 32, 64)
 
 
 def suite_worlds(family: str, size: int, n: int, seed: int):
-    """n (grid, instruction, goal) of one family and size; the same for every model."""
+    """Return n (grid, instruction, goal) of one family and size; the same for every model."""
     rng = np.random.default_rng([seed, size, FAMILIES.index(family)])
     return [sample(rng, family, size) for _ in range(n)]
 
@@ -123,8 +126,12 @@ def run_suite(
 
 
 def plot_failures(out: Path, failures: dict) -> list[Path]:
-    """One PNG per family with failures: each row a map (instruction above it), the true
-    goal (green circle) and the model's choice (red x) on the map and on the value map."""
+    """
+    One PNG per family with failures.
+
+    Each row a map (instruction above it), the true goal (green circle) and the model's choice (red
+    x) on the map and on the value map.
+    """
     from .plots import plt
 
     paths = []
@@ -197,7 +204,8 @@ def cmd_suite(args) -> int:
         print(json.dumps(result))
         return 0
     print(
-        f'{result["model"]} ({args.checkpoint}), {args.n} worlds per family and size, seed {args.seed}'
+        f'{result["model"]} ({args.checkpoint}), {args.n} worlds per family and size, '
+        f'seed {args.seed}'
     )
     print(f'{"family":16s}' + ''.join(f'{s:>16s}' for s in result['sizes']))
     for family, per_size in result['families'].items():
@@ -211,7 +219,8 @@ def cmd_suite(args) -> int:
     )
     if args.out:
         print(
-            f'wrote {Path(args.out) / "suite.json"} and {len(result["failure_plots"])} failure PNGs'
+            f'wrote {Path(args.out) / "suite.json"} and '
+            f'{len(result["failure_plots"])} failure PNGs'
         )
     return 0
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import re
 from collections import Counter
+import re
 from typing import Iterable
 
 import numpy as np

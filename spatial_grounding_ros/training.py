@@ -1,4 +1,7 @@
-"""Supervised training (value-map MSE plus a goal-cell cross-entropy) and evaluation,
+"""
+Supervised training and evaluation, readable top to bottom.
+
+Supervised training (value-map MSE plus a goal-cell cross-entropy) and evaluation,
 readable top to bottom.
 
 Adam at the paper's learning rate; a validation split carved out of train (by world)
@@ -7,9 +10,9 @@ selects the checkpoint; the test split is only ever evaluated.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from pathlib import Path
+import time
 
 import numpy as np
 import torch
@@ -26,10 +29,9 @@ from .datasets import (
     pw_world_ids,
     split_by_world,
 )
-from .generator import MODES, generate
-from .models import ModelConfig, build_model
+from .generator import generate, MODES
+from .models import build_model, ModelConfig
 from .text import Vocabulary
-
 
 # Per-task settings, one row per task.
 # epochs: the budget (the validation split picks the best epoch within it). PuddleWorld
@@ -46,27 +48,27 @@ from .text import Vocabulary
 #   ISI keeps 0 until it is measured there: its rows were trained without it.
 # model: ModelConfig fields for this task's models. PuddleWorld's gradient maps rise by 1
 #   every 4.5 cells: exactly the paper's on 10x10, and the same per cell on larger maps.
-_PW = dict(
-    synthetic=32000,
-    world_instructions=True,
-    mirrors=True,
-    attention_warmup=0.85,
-    goal_weight=1.0,
-    model={'gradient_cells': 4.5},
-)
+_PW = {
+    'synthetic': 32000,
+    'world_instructions': True,
+    'mirrors': True,
+    'attention_warmup': 0.85,
+    'goal_weight': 1.0,
+    'model': {'gradient_cells': 4.5},
+}
 TASK_SETTINGS = {
     'pw-local': dict(_PW, epochs=40),
     'pw-global': dict(_PW, epochs=40),
     'pw': dict(_PW, epochs=40),
-    'isi': dict(
-        epochs=25,
-        synthetic=0,
-        world_instructions=False,
-        mirrors=False,
-        attention_warmup=0.0,
-        goal_weight=0.0,
-        model={},
-    ),
+    'isi': {
+        'epochs': 25,
+        'synthetic': 0,
+        'world_instructions': False,
+        'mirrors': False,
+        'attention_warmup': 0.0,
+        'goal_weight': 0.0,
+        'model': {},
+    },
 }
 EPOCHS = {task: s['epochs'] for task, s in TASK_SETTINGS.items()}
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
@@ -77,9 +79,13 @@ GENERATOR_MODE = {'pw-local': 'local', 'pw-global': 'global', 'pw': 'mixed'}
 
 @dataclass
 class TrainConfig:
-    """Training hyper-parameters. Adam at the paper's lr 1e-3; batch 64, not the paper's 512:
-    PW local has ~1400 training maps, so 512 gives 3 steps an epoch, and on a CPU budget
-    the number of steps, not the batch, is what limits the fit."""
+    """
+    Training hyper-parameters.
+
+    Adam at the paper's lr 1e-3; batch 64, not the paper's 512: PW local has ~1400 training maps,
+    so 512 gives 3 steps an epoch, and on a CPU budget the number of steps, not the batch, is what
+    limits the fit.
+    """
 
     epochs: int | None = None  # None: the task's (TASK_SETTINGS)
     batch_size: int = 64
@@ -88,15 +94,13 @@ class TrainConfig:
     val_fraction: float = 0.1  # of the training worlds
     attention_warmup: float | None = None  # share of epochs with attention off; None: per task
     synthetic: int | None = None  # generated examples added to training; None: the task's
-    world_instructions: bool | None = (
-        None  # the training worlds' pickle instructions; None: the task's
-    )
+    # the training worlds' pickle instructions; None: the task's
+    world_instructions: bool | None = None
     mirrors: bool | None = None  # add mirrored copies of the human examples; None: the task's
     goal_weight: float | None = None  # weight of the goal-cell cross-entropy; None: the task's
     goal_scale: float = 5.0  # values times this are the goal cross-entropy's logits (at start)
-    learn_goal_scale: bool = (
-        True  # learn that temperature, so the CE can rank without warping values
-    )
+    # learn that temperature, so the CE can rank without warping values
+    learn_goal_scale: bool = True
     select: str = 'pq'  # checkpoint = epoch of the second half with the best validation
     # PQ plus generated-validation HIT (ties: MSE), or "mse"
     seed: int = 0
@@ -108,8 +112,12 @@ def encode(vocab: Vocabulary, data: GroundingSet) -> tuple[torch.Tensor, torch.T
 
 
 def batches(lengths: np.ndarray, batch_size: int, rng: np.random.Generator) -> list[np.ndarray]:
-    """Shuffled batches of similar instruction length (sorted within pools of 8 batches),
-    so padding, which the per-pair attention pays for, stays short."""
+    """
+    Yield shuffled batches of similar instruction length.
+
+    Shuffled batches of similar instruction length (sorted within pools of 8 batches),
+    so padding, which the per-pair attention pays for, stays short.
+    """
     order = rng.permutation(len(lengths))
     pool = batch_size * 8
     out = []
@@ -144,15 +152,19 @@ def evaluate(model, vocab: Vocabulary, data: GroundingSet) -> dict:
 
 
 def evaluate_hit(model, vocab: Vocabulary, data: GroundingSet) -> float:
-    """The exact-goal rate alone (no score iteration): cheap enough for every epoch."""
+    """Return the exact-goal rate alone (no score iteration): cheap enough for every epoch."""
     return float(np.mean((world.argmax_cells(predict(model, vocab, data)) == data.goals).all(1)))
 
 
 def training_parts(
     task: str, train: GroundingSet, val: GroundingSet, tc: TrainConfig, data_dir: str | Path
 ) -> list[GroundingSet]:
-    """What a task trains on, one GroundingSet per map size: the human examples (with their
-    mirror images), the training worlds' pickle instructions, generated worlds."""
+    """
+    Return what a task trains on, one GroundingSet per map size.
+
+    The human examples (with their mirror images), the training worlds' pickle instructions,
+    generated worlds.
+    """
     human = with_mirrors(train) if tc.mirrors else train
     parts = [human]
     if tc.world_instructions:
@@ -187,9 +199,12 @@ def training_parts(
 
 
 def goal_loss(pred: torch.Tensor, goals: torch.Tensor, scale) -> torch.Tensor:
-    """Cross-entropy of the goal cell over the map's cells, the values times `scale` as
-    logits. MSE alone barely penalises a peak one cell off (neighbouring true values differ
-    by 10%), so the argmax often lands beside the goal, or on the object named."""
+    """
+    Cross-entropy of the goal cell over the map's cells, the values times `scale` as logits.
+
+    MSE alone barely penalises a peak one cell off (neighbouring true values differ by 10%), so the
+    argmax often lands beside the goal, or on the object named.
+    """
     b, h, w = pred.shape
     return F.cross_entropy(pred.reshape(b, h * w) * scale, goals[:, 0] * w + goals[:, 1])
 
@@ -212,8 +227,12 @@ def train_supervised(
     progress: bool = True,
     **model_options,
 ) -> tuple[Path, dict]:
-    """Train `model_name` on `task`, keep the epoch with the best validation score, write
-    `out/<task>_<model>.pt`; returns its path and a summary."""
+    """
+    Train `model_name` on `task` and keep the epoch with the best validation score.
+
+    Train `model_name` on `task`, keep the epoch with the best validation score, write
+    `out/<task>_<model>.pt`; returns its path and a summary.
+    """
     settings = TASK_SETTINGS[task]
     tc = TrainConfig(
         **{

@@ -1,4 +1,5 @@
-"""Grid world model: the MDP, value iteration, the policy of a value map, and the metrics.
+"""
+Grid world model: the MDP, value iteration, the policy of a value map, and the metrics.
 
 Conventions (shared by every data set and the ROS layer):
 - a grid is an (H, W) integer array of entity indices; row 0 is the top (north) row;
@@ -35,7 +36,7 @@ def next_cell_indices(height: int, width: int) -> np.ndarray:
 
 
 def step_cell(cell: tuple[int, int], action: int, shape: tuple[int, int]) -> tuple[int, int]:
-    """The cell one move leads to (off-map moves stay put)."""
+    """Return the cell one move leads to (off-map moves stay put)."""
     if not 0 <= int(action) < len(ACTIONS):
         raise ValueError(f'action {action} is out of range 0..{len(ACTIONS) - 1}')
     r = min(max(cell[0] + int(ACTIONS[action][0]), 0), shape[0] - 1)
@@ -44,7 +45,8 @@ def step_cell(cell: tuple[int, int], action: int, shape: tuple[int, int]) -> tup
 
 
 def reward_map(obstacles: np.ndarray, goal: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Reward and terminal maps for one goal: -1 on obstacle cells, +3 (terminal) at the goal.
+    """
+    Reward and terminal maps for one goal: -1 on obstacle cells, +3 (terminal) at the goal.
 
     The goal reward adds to the cell's own (a goal inside a puddle carries 2), as in the
     PuddleWorld pickles.
@@ -63,7 +65,8 @@ def value_iteration(
     tol: float = 1e-6,
     max_iter: int = 10_000,
 ) -> np.ndarray:
-    """Optimal state values V(s) = R(s) + gamma * max_a V(next(s, a)); V = R at terminal cells.
+    """
+    Optimal state values V(s) = R(s) + gamma * max_a V(next(s, a)); V = R at terminal cells.
 
     rewards, terminal: (H, W) or (B, H, W). Returns values of the same shape.
     """
@@ -86,7 +89,11 @@ def value_iteration(
 
 
 def greedy_policy(values: np.ndarray) -> np.ndarray:
-    """Greedy action index per cell of a value map (H, W) -> (H, W): the move to the best next cell."""
+    """
+    Greedy action index per cell of a value map (H, W) -> (H, W).
+
+    The move to the best next cell.
+    """
     h, w = values.shape
     return values.reshape(-1)[next_cell_indices(h, w)].argmax(axis=1).reshape(h, w)
 
@@ -108,7 +115,8 @@ def policy_scores(
     tol: float = 0.01,
     max_iter: int = 10_000,
 ) -> np.ndarray:
-    """Janner's score iteration: S(s) = R(s) at terminal cells, else R(s) + gamma * E_pi[S(next)].
+    """
+    Janner's score iteration: S(s) = R(s) at terminal cells, else R(s) + gamma * E_pi[S(next)].
 
     Iterates until the summed absolute change of each map is below `tol` (0.01 as in the
     reference code). Batched: (B, H, W) inputs, (B,) mean score per map.
@@ -159,8 +167,11 @@ def policy_quality(
 def evaluate_maps(
     pred: np.ndarray, true: np.ndarray, rewards: np.ndarray, terminal: np.ndarray
 ) -> dict:
-    """The paper's value-map metrics over a set of maps (all (B, H, W)), and HIT: the share
-    of maps whose predicted argmax is the goal cell (the true map's unique maximum)."""
+    """
+    Return the paper's value-map metrics over a set of maps (all (B, H, W)), and HIT.
+
+    The share of maps whose predicted argmax is the goal cell (the true map's unique maximum).
+    """
     pred, true = np.asarray(pred, np.float64), np.asarray(true, np.float64)
     distances = manhattan_distances(pred, true)
     return {

@@ -1,9 +1,13 @@
-"""Shared test set-up. Tests that need the real data sets use the `data_dir` fixture, which
-skips them (with the reason) when ../shared/data is absent."""
+"""
+Shared test set-up.
+
+Tests that need the real data sets use the `data_dir` fixture, which skips them (with the reason)
+when ../shared/data is absent.
+"""
 
 import os
-import random
 from pathlib import Path
+import random
 
 import pytest
 
@@ -23,8 +27,11 @@ def data_dir() -> Path:
 
 
 class RosGraph:
-    """A fresh rclpy Context whose nodes spin in a background executor thread. Tests wait
-    on what the nodes received with wait_for(); close() destroys every node added."""
+    """
+    A fresh rclpy Context whose nodes spin in a background executor thread.
+
+    Tests wait on what the nodes received with wait_for(); close() destroys every node added.
+    """
 
     def __init__(self):
         import threading
@@ -74,7 +81,7 @@ class RosGraph:
 
 @pytest.fixture
 def ros_context():
-    """A RosGraph for one test (see RosGraph)."""
+    """Provide a RosGraph for one test (see RosGraph)."""
     pytest.importorskip('rclpy', reason='rclpy is not installed')
     graph = RosGraph()
     yield graph
@@ -83,7 +90,7 @@ def ros_context():
 
 @pytest.fixture(scope='module')
 def ros_module_context():
-    """A RosGraph shared by a test module, so its nodes start once."""
+    """Provide a RosGraph shared by a test module, so its nodes start once."""
     pytest.importorskip('rclpy', reason='rclpy is not installed')
     graph = RosGraph()
     yield graph

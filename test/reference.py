@@ -1,6 +1,8 @@
-"""Reference implementations of the metrics' building blocks, written apart from world.py to
-check it: plain loops over cells and moves (score iteration) or edge-padded shifts (value
-iteration), from the definitions in DESIGN.md, sharing no code with the package.
+"""
+Reference implementations of the metrics' building blocks, written apart from world.py to check it.
+
+Plain loops over cells and moves (score iteration) or edge-padded shifts (value iteration), from
+the definitions in DESIGN.md, sharing no code with the package.
 
 Conventions (DESIGN.md): 4 moves up, down, left, right; a move off the map stays put;
 gamma 0.9; a terminal cell's value (or score) is its reward.
@@ -22,11 +24,14 @@ def next_cell(r: int, c: int, move: tuple[int, int], h: int, w: int) -> tuple[in
 
 
 def mean_policy_score(values, rewards, terminal, gamma: float = GAMMA, tol: float = 0.01) -> float:
-    """Janner's score iteration for one (H, W) map, cell by cell: pi(a|s) = softmax over the
-    4 moves of values[next(s, a)]; S starts at 0, and each sweep (from the previous sweep's
-    S) sets S(s) = R(s) at terminal cells, R(s) + gamma * sum_a pi(a|s) S(next(s, a))
-    elsewhere; the sweep whose summed absolute change is below `tol` is the last one kept.
-    Returns the mean of S over the cells."""
+    """
+    Janner's score iteration for one (H, W) map, cell by cell.
+
+    pi(a|s) = softmax over the 4 moves of values[next(s, a)]; S starts at 0, and each sweep (from
+    the previous sweep's S) sets S(s) = R(s) at terminal cells, R(s) + gamma * sum_a pi(a|s)
+    S(next(s, a)) elsewhere; the sweep whose summed absolute change is below `tol` is the last one
+    kept. Returns the mean of S over the cells.
+    """
     values, rewards, terminal = (np.asarray(x).tolist() for x in (values, rewards, terminal))
     h, w = len(values), len(values[0])
     policy = {}
@@ -64,8 +69,12 @@ def policy_quality(pred, true, rewards, terminal) -> float:
 
 
 def value_iteration(rewards, terminal, gamma: float = GAMMA, tol: float = 1e-9) -> np.ndarray:
-    """Optimal values of (B, H, W) reward and terminal maps: V = R at terminal cells, else
-    R + gamma * the best neighbour's V, a move off the map staying put (edge padding)."""
+    """
+    Optimal values of (B, H, W) reward and terminal maps.
+
+    V = R at terminal cells, else R + gamma * the best neighbour's V, a move off the map staying
+    put (edge padding).
+    """
     r, t = np.asarray(rewards, np.float64), np.asarray(terminal, bool)
     v = np.zeros_like(r)
     while True:

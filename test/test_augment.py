@@ -4,12 +4,11 @@ from collections import Counter
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import datasets, generator, world
 from spatial_grounding_ros.augment import (
+    mirror,
     SWAP_LEFT_RIGHT,
     SWAP_UP_DOWN,
-    mirror,
     swap_words,
     with_mirrors,
 )

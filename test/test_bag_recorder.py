@@ -1,4 +1,5 @@
-"""The bag recorder over real DDS writes what `ros2 bag record -s mcap` of Jazzy writes.
+"""
+The bag recorder over real DDS writes what `ros2 bag record -s mcap` of Jazzy writes.
 
 - Latched topics are subscribed transient local (a map latched before recording started is
   in the bag); the bytes stored are the CDR the publisher sent.
@@ -21,17 +22,16 @@ make_reader = pytest.importorskip(
     'mcap.reader', reason='the mcap reader is not installed (pip install mcap, requirements.txt)'
 ).make_reader
 
-from grounder_helpers import unique_namespace  # noqa: E402
+from grounder_helpers import unique_namespace  # noqa: E402, I100
 from nav_msgs.msg import OccupancyGrid  # noqa: E402
 from rclpy.duration import Duration  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
-from std_msgs.msg import Header, String  # noqa: E402
-
 from spatial_grounding_ros.bags import open_bag, typestore  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.bag_recorder import BagRecorder, LATCHED_QOS  # noqa: E402
+from std_msgs.msg import Header, String  # noqa: E402
 
 INFINITE = {'sec': 9223372036, 'nsec': 854775807}  # RMW_DURATION_INFINITE
 
@@ -144,8 +144,12 @@ def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(
 
 
 def test_log_time_is_reception_not_when_a_busy_thread_gets_to_the_callback(ros_context, tmp_path):
-    """The recorder's executor thread is kept busy for 1.5 s while a message arrives (as
-    the demo's thread was while drawing a PNG): its log_time is still when it arrived."""
+    """
+    Check that a message's log time is its reception, not when a busy thread gets to it.
+
+    The recorder's executor thread is kept busy for 1.5 s while a message arrives (as
+    the demo's thread was while drawing a PNG): its log_time is still when it arrived.
+    """
     graph = ros_context
     namespace = unique_namespace('recorder_busy_test')
     source = graph.add(Node('source', namespace=namespace, context=graph.context))

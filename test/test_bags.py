@@ -1,11 +1,14 @@
-"""eval-bag on a bag written by another tool (rosbags directly, standard message types
-only) and bad input: missing, non-bag, truncated, bag without the needed topics."""
+"""
+eval-bag on a bag written by another tool, and on bad input.
+
+eval-bag on a bag written by another tool (rosbags directly, standard message types
+only) and bad input: missing, non-bag, truncated, bag without the needed topics.
+"""
 
 import json
 
 import numpy as np
 import pytest
-
 import reference
 from spatial_grounding_ros import cli, world
 from spatial_grounding_ros.bags import BagWriter, evaluate_bag, typestore
@@ -21,7 +24,7 @@ def header(frame='map'):
 
 
 def pose_at(cell, height=10, resolution=0.5):
-    """PoseStamped at the centre of data-set cell (row, col) of a map at origin (0, 0)."""
+    """Return a PoseStamped at the centre of data-set cell (row, col) of a map at origin (0, 0)."""
     P = T['geometry_msgs/msg/Pose']
     point = T['geometry_msgs/msg/Point'](
         x=(cell[1] + 0.5) * resolution, y=(height - 1 - cell[0] + 0.5) * resolution, z=0.0
@@ -69,12 +72,15 @@ def write_bag(
     names=None,
     other_goals=None,
 ):
-    """episodes: (instruction, answered cell, true cell); gridworld order: truth, then
-    instruction, then goal (and value map). The predicted map is the true map of the answered
-    cell, plus `noise` times a seeded normal; `names` renames topics (role -> topic);
-    `other_goals` (topic -> one cell per episode) adds a second answerer's goals.
-    With values, returns the path and the float32 maps written: (predicted, true values,
-    true rewards) per answered episode."""
+    """
+    Write a bag of episodes.
+
+    episodes: (instruction, answered cell, true cell); gridworld order: truth, then instruction,
+    then goal (and value map). The predicted map is the true map of the answered cell, plus `noise`
+    times a seeded normal; `names` renames topics (role -> topic); `other_goals` (topic -> one cell
+    per episode) adds a second answerer's goals. With values, returns the path and the float32 maps
+    written: (predicted, true values, true rewards) per answered episode.
+    """
     puddles = np.zeros((10, 10), bool) if puddles is None else puddles
     grid = puddles.astype(np.int64)  # entity 1 = puddle
     topic = {
@@ -150,9 +156,13 @@ def test_md_from_a_standard_types_bag(tmp_path, capsys):
 
 
 def test_pq_and_mse_when_value_maps_are_recorded(tmp_path):
-    """MSE and PQ of eval-bag equal numpy's MSE and test/reference.py's cell-by-cell PQ of
+    """
+    Check eval-bag's MSE and PQ against numpy's MSE and test/reference.py's PQ.
+
+    MSE and PQ of eval-bag equal numpy's MSE and test/reference.py's cell-by-cell PQ of
     the very float32 maps written into the bag (a map with puddles, noisy predictions, one
-    answer off by a cell). The truth's cell is the terminal one."""
+    answer off by a cell). The truth's cell is the terminal one.
+    """
     puddles = np.zeros((10, 10), bool)
     puddles[4:7, 2] = puddles[0, 5:8] = True
     episodes = [('a', (1, 1), (1, 1)), ('b', (5, 5), (5, 6)), ('c', (8, 8), (0, 6))]
@@ -177,9 +187,13 @@ def test_pq_and_mse_when_value_maps_are_recorded(tmp_path):
 
 
 def test_eval_bag_topic_options_pick_the_topics(tmp_path, capsys):
-    """`eval-bag --goal-topic` etc.: a bag with two robots' goals side by side is an error
-    naming both without the option (never a silent pick), and each robot's own MD with it;
-    a truth recorded under another name is found by its relative name."""
+    """
+    `eval-bag --goal-topic` etc..
+
+    A bag with two robots' goals side by side is an error naming both without the option (never a
+    silent pick), and each robot's own MD with it; a truth recorded under another name is found by
+    its relative name.
+    """
     bag = write_bag(
         tmp_path / 'bag',
         [('a', (1, 1), (1, 1)), ('b', (5, 5), (5, 8))],

@@ -1,10 +1,13 @@
-"""What the shipped default model answers: clear instructions on hand-made and generated
-worlds land on the cell they name. These fail, not skip, when a model regresses: the
-thresholds sit a little under what the shipped `pw_t-rnet-attn` does (README, suite table)."""
+"""
+What the shipped default model answers.
+
+Clear instructions on hand-made and generated worlds land on the cell they name. These fail, not
+skip, when a model regresses: the thresholds sit a little under what the shipped `pw_t-rnet-attn`
+does (README, suite table).
+"""
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import suite
 from spatial_grounding_ros.entities import PUDDLEWORLD
 from spatial_grounding_ros.generator import GLOBAL_FAMILIES, LOCAL_FAMILIES

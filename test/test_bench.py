@@ -1,5 +1,9 @@
-"""`spatial-grounding bench` with tiny counts: every section runs (the ROS round trip against a
-real grounder process) and the JSON holds the numbers and the machine they came from."""
+"""
+`spatial-grounding bench` with tiny counts.
+
+Every section runs (the ROS round trip against a real grounder process) and the JSON holds the
+numbers and the machine they came from.
+"""
 
 import json
 import os
@@ -9,8 +13,7 @@ import torch
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import random_checkpoint  # noqa: E402
-
+from grounder_helpers import random_checkpoint  # noqa: E402, I100
 from spatial_grounding_ros import cli  # noqa: E402
 
 

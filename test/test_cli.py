@@ -5,9 +5,8 @@ import subprocess
 import sys
 
 import pytest
-import torch
-
 from spatial_grounding_ros.checkpoints import PACKAGED_DIR
+import torch
 
 
 def run(*args, timeout=300):

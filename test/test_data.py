@@ -1,13 +1,16 @@
-"""Data sets: the paper's split counts, ISI conversion, vocabulary, the world pickles' instructions."""
+"""
+Data sets.
+
+The paper's split counts, ISI conversion, vocabulary, the world pickles' instructions.
+"""
 
 import gzip
 import json
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import datasets, world
-from spatial_grounding_ros.text import UNK, Vocabulary, tokenize
+from spatial_grounding_ros.text import tokenize, UNK, Vocabulary
 
 
 @pytest.mark.parametrize(
@@ -35,9 +38,13 @@ def test_train_and_test_worlds_are_disjoint(data_dir):
 
 @pytest.mark.parametrize('split,count', [('train', 11871), ('test', 3177)])
 def test_isi_counts_and_grid(data_dir, split, count):
-    """Counts, grid, and every value map: the reward map is the ISI conversion (+3 terminal
-    at the goal, -1 on every block but the moved one, which leaves its cell), and the value
-    map is what test/reference.py's value iteration makes of it, cell for cell."""
+    """
+    Counts, grid, and every value map.
+
+    The reward map is the ISI conversion (+3 terminal at the goal, -1 on every block but the moved
+    one, which leaves its cell), and the value map is what test/reference.py's value iteration
+    makes of it, cell for cell.
+    """
     import reference
 
     data = datasets.load_isi(data_dir, split)
@@ -114,7 +121,11 @@ def test_vocabulary_reserves_pad_and_unknown():
 
 @pytest.mark.parametrize('task,floor', [('pw-local', 0.675), ('pw-global', 0.750), ('isi', 0.002)])
 def test_a_final_relu_would_floor_the_mse(data_dir, task, floor):
-    """Why the output layer has no final ReLU: clipping the negative true values to 0 alone
-    costs more than the paper's whole PW MSE (0.22 local, 0.40 global)."""
+    """
+    Why the output layer has no final ReLU.
+
+    Clipping the negative true values to 0 alone costs more than the paper's whole PW MSE (0.22
+    local, 0.40 global).
+    """
     values = datasets.load_task(task, 'test', data_dir).values.astype(np.float64)
     assert np.mean(np.minimum(values, 0) ** 2) == pytest.approx(floor, abs=5e-4)

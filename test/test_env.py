@@ -1,9 +1,12 @@
-"""The RL environment: rewards and termination come from the example's maps, moves from
-world.step_cell, and the true values never reach the observation."""
+"""
+The RL environment.
+
+Rewards and termination come from the example's maps, moves from world.step_cell, and the true
+values never reach the observation.
+"""
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import world
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
@@ -96,8 +99,12 @@ def test_sequential_order_and_generator_source():
 
 
 def test_puddleworld_episodes(data_dir):
-    """Episodes of a data set split (read from SPATIAL_GROUNDING_DATA or ../shared/data, the
-    data_dir fixture): the example's own map, instruction and rewards."""
+    """
+    Check the episodes of a data set split.
+
+    Episodes of a data set split (read from SPATIAL_GROUNDING_DATA or ../shared/data, the
+    data_dir fixture): the example's own map, instruction and rewards.
+    """
     data = load_episodes('pw-local', 'test', str(data_dir))
     assert len(data) == 399
     env = GridWorldEnv(data)

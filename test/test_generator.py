@@ -1,12 +1,15 @@
-"""The generator: every relation family at any size >= 5, in Janner et al.'s phrasing, with
-the goal an independent reading of the instruction gives."""
+"""
+The generator.
+
+Every relation family at any size >= 5, in Janner et al.'s phrasing, with the goal an independent
+reading of the instruction gives.
+"""
 
 import pickle
 import re
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import generator, world
 from spatial_grounding_ros.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
@@ -49,7 +52,7 @@ def horizontal(word, n):
 
 
 def answer(grid, text):
-    """The cell an instruction names, read independently of the generator's code."""
+    """Return the cell an instruction names, read independently of the generator's code."""
     if m := re.fullmatch(rf'reach cell with ({OBJ})', text):
         return only(grid, m[1])
     if m := re.fullmatch(rf'reach cell ({"|".join(ONE_STEP)}) ({OBJ})', text):
@@ -171,8 +174,12 @@ def test_unknown_family_size_and_mode_are_clear_errors():
 
 
 def test_phrasing_is_janners_word_for_word(data_dir):
-    """Every generated template (object names and numbers abstracted) occurs among the world
-    pickles' own synthetic instructions, and every family is covered by them."""
+    """
+    Check that every generated template occurs among the world pickles' instructions.
+
+    Every generated template (object names and numbers abstracted) occurs among the world
+    pickles' own synthetic instructions, and every family is covered by them.
+    """
 
     def template(text):
         text = re.sub(rf'\b({"|".join(PUDDLEWORLD_UNIQUE)})\b', 'U', text)

@@ -1,26 +1,29 @@
-"""The gridworld node over real DDS: it publishes an episode (map in the OccupancyGrid
-orientation, instruction, truth), moves on actions, walks to a goal_pose, and answers bad
-input with a warning diagnostic while it keeps serving. Plus the closed-loop demo."""
+"""
+The gridworld node over real DDS.
+
+It publishes an episode (map in the OccupancyGrid orientation, instruction, truth), moves on
+actions, walks to a goal_pose, and answers bad input with a warning diagnostic while it keeps
+serving. Plus the closed-loop demo.
+"""
 
 import os
 import secrets
 import time
 
-import numpy as np
-import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import numpy as np
+import pytest
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from std_msgs.msg import Bool, Float32, Float32MultiArray, Int32, String
-from std_srvs.srv import Trigger
-
 from spatial_grounding_ros import world
 from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.ros import convert
-from spatial_grounding_ros.ros.gridworld_node import LATCHED, STEPS, GridWorldNode
+from spatial_grounding_ros.ros.gridworld_node import GridWorldNode, LATCHED, STEPS
+from std_msgs.msg import Bool, Float32, Float32MultiArray, Int32, String
+from std_srvs.srv import Trigger
 
 
 @pytest.fixture
@@ -162,11 +165,14 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
 
 
 def test_closed_loop_demo(tmp_path, capsys):
-    """Three episodes through the real processes, each goal_pose on the cell the instruction names.
+    """
+    Three episodes through the real processes, each goal_pose on the cell the instruction names.
+
     The grounder hears the first instruction as
     it is published (no episode is restarted): the bag holds exactly one instruction and one
     goal per episode. Its agent poses were logged on reception, although this process drew a
-    PNG between episodes."""
+    PNG between episodes.
+    """
     from spatial_grounding_ros.ros.demo import run_demo
 
     summary = run_demo(
@@ -214,9 +220,9 @@ def test_closed_loop_demo(tmp_path, capsys):
     ],
 )
 def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path, parameter, needle):
+    from pathlib import Path
     import subprocess
     import sys
-    from pathlib import Path
 
     exe = Path(sys.executable).parent / 'gridworld'
     if not exe.is_file():

@@ -1,22 +1,24 @@
-"""`ros2 run spatial_grounding_ros grounder` will work: a colcon build of the package in a
-temporary workspace, the executable found through the ament index exactly as `ros2 run`
-finds it, started as a process that joins the ROS graph as `spatial_grounder`, reads its
-config from the install's share directory, and answers a request."""
+"""
+`ros2 run spatial_grounding_ros grounder` will work.
+
+A colcon build of the package in a temporary workspace, the executable found through the ament
+index exactly as `ros2 run` finds it, started as a process that joins the ROS graph as
+`spatial_grounder`, reads its config from the install's share directory, and answers a request.
+"""
 
 import glob
 import os
+from pathlib import Path
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 ament_packages = pytest.importorskip('ament_index_python.packages')
 
-from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
-
+from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402, I100
 from spatial_grounding_ros.checkpoints import load_checkpoint, resolve_checkpoint  # noqa: E402
 from spatial_grounding_ros.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT, Grounder  # noqa: E402
@@ -70,8 +72,11 @@ def install_prefix(tmp_path_factory):
 
 @pytest.fixture
 def ament_env(install_prefix, monkeypatch):
-    """What sourcing install/setup.bash sets for this package (its dsv hooks): the prefix on
-    AMENT_PREFIX_PATH, its site-packages on PYTHONPATH."""
+    """
+    Return what sourcing install/setup.bash sets for this package (its dsv hooks).
+
+    The prefix on AMENT_PREFIX_PATH, its site-packages on PYTHONPATH.
+    """
     [site] = glob.glob(str(install_prefix / 'lib' / 'python3*' / 'site-packages'))
     for var, value in (('AMENT_PREFIX_PATH', str(install_prefix)), ('PYTHONPATH', site)):
         monkeypatch.setenv(var, os.pathsep.join(filter(None, [value, os.environ.get(var)])))
@@ -104,9 +109,13 @@ INSTALLED = (
 
 
 def test_installed_files_are_the_checked_ones(install_prefix, ament_env):
-    """The launch, params and RViz files colcon installs are the source files whose
+    """
+    Check that colcon installs the source launch, params and RViz files.
+
+    The launch, params and RViz files colcon installs are the source files whose
     arguments, nodes, parameters and displays test_ros_config checks (that part needs no
-    ROS launch); the installed params files load with rclpy's parser."""
+    ROS launch); the installed params files load with rclpy's parser.
+    """
     from rclpy.parameter import parameter_dict_from_yaml_file
 
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
@@ -120,9 +129,12 @@ def test_installed_files_are_the_checked_ones(install_prefix, ament_env):
 
 @pytest.mark.parametrize('name, nodes', [('grounder.launch.py', 1), ('demo.launch.py', 3)])
 def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, name, nodes):
-    """What only ROS launch can show: the installed file builds a description holding its
-    Nodes. `launch` and `launch_ros` are not on PyPI, so this skips in the venv and runs on a
-    ROS 2 system (colcon test)."""
+    """
+    What only ROS launch can show: the installed file builds a description holding its Nodes.
+
+    `launch` and `launch_ros` are not on PyPI, so this skips in the venv and runs on a ROS 2 system
+    (colcon test).
+    """
     # launch.actions, not launch: this repository's launch/ folder imports as `launch`
     pytest.importorskip(
         'launch.actions',

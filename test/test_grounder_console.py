@@ -1,19 +1,22 @@
-"""The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
+"""
+The venv console script `grounder` with its packaged defaults.
+
+The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
 test maps with the goal that `spatial-grounding eval` predicts for them (the argmax of the
 same model's value map, computed through the training code's batched predict); bad start-up
-input is one error line and exit status 1."""
+input is one error line and exit status 1.
+"""
 
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
-
+from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402, I100
 from spatial_grounding_ros import world  # noqa: E402
 from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
 from spatial_grounding_ros.datasets import load_task  # noqa: E402
@@ -59,9 +62,12 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
 
 
 def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
-    """README: a bad checkpoint, entity table or parameter value or type stops the node at
-    start-up with one line `grounder: error: ...` and exit status 1 (no traceback), naming
-    the problem."""
+    """
+    Check a claim of the README.
+
+    README: a bad checkpoint, entity table or parameter value or type stops the node at start-up
+    with one line `grounder: error: ...` and exit status 1 (no traceback), naming the problem.
+    """
     exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
         pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
@@ -70,7 +76,9 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
     cases = {  # parameter -> what the line must say
         f'checkpoint:={tmp_path / "missing.pt"}': 'missing.pt: checkpoint not found',
         f'checkpoint:={corrupt}': 'corrupt.pt: not a readable checkpoint',
-        'entity_table:=entities_isi.yaml': 'is not the one checkpoint pw_t-rnet-attn was trained on',
+        'entity_table:=entities_isi.yaml': (
+            'is not the one checkpoint pw_t-rnet-attn was trained on'
+        ),
         'entity_table:=no_such_table.yaml': 'no_such_table.yaml: config file not found',
         # parameters are checked against their declared type and range before anything loads
         'max_cells:=abc': "parameter max_cells must be an integer, got a string 'abc'",
@@ -99,8 +107,12 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
 
 
 def test_a_bad_params_file_is_one_line_of_ours_and_exit_1(tmp_path):
-    """README: a missing or malformed --params-file exits 1 with our one error line after
-    rcl's own parse error, and no traceback."""
+    """
+    Check a claim of the README.
+
+    README: a missing or malformed --params-file exits 1 with our one error line after rcl's own
+    parse error, and no traceback.
+    """
     exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
         pytest.skip(f'{exe} is not installed (pip install -e . makes it)')

@@ -1,8 +1,12 @@
-"""The grounder as a lifecycle node, driven over real DDS by a lifecycle client (what Nav2's
+"""
+The grounder as a lifecycle node, driven over real DDS by a lifecycle client.
+
+The grounder as a lifecycle node, driven over real DDS by a lifecycle client (what Nav2's
 lifecycle manager does): with autostart false it waits unconfigured; configure loads the
 model and creates the topics; only while active does an instruction get a goal; deactivate
 drops the held instruction; cleanup releases the model, the map and the topics; a configure
-that cannot load the checkpoint fails and leaves the node unconfigured and serving."""
+that cannot load the checkpoint fails and leaves the node unconfigured and serving.
+"""
 
 import time
 
@@ -10,13 +14,12 @@ import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
 from lifecycle_msgs.msg import State, Transition  # noqa: E402
 from lifecycle_msgs.srv import ChangeState, GetState  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-
 from spatial_grounding_ros.generator import generate  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 

@@ -1,7 +1,11 @@
-"""The grounder node over real DDS, against the Python API it adapts: every output of a good
-request matches Grounder.ground on the same grid; every kind of bad input gets a warning, a
-WARN diagnostic naming the problem and no goal, and the node answers the next good request.
-One node (a seeded untrained model, so no trained checkpoint is needed) for the module."""
+"""
+The grounder node over real DDS, against the Python API it adapts.
+
+Every output of a good request matches Grounder.ground on the same grid; every kind of bad input
+gets a warning, a WARN diagnostic naming the problem and no goal, and the node answers the next
+good request. One node (a seeded untrained model, so no trained checkpoint is needed) for the
+module.
+"""
 
 import time
 
@@ -11,15 +15,14 @@ import torch
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
-from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-from std_msgs.msg import Header  # noqa: E402
-
 from spatial_grounding_ros.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
 
 NAMESPACE = unique_namespace('grounder_node_test')
 MAX_CELLS = 400
@@ -60,9 +63,13 @@ def nodes(ros_module_context, checkpoint):
 
 
 def wait_held(nodes, message) -> None:
-    """Until the grounder says it holds `message` as its map (its OK entity_map diagnostic
+    """
+    Wait until the grounder says it holds `message` as its map.
+
+    Until the grounder says it holds `message` as its map (its OK entity_map diagnostic
     with that stamp): topics are not ordered among each other, so an instruction sent right
-    after a map could otherwise overtake it. The node's own state agrees."""
+    after a map could otherwise overtake it. The node's own state agrees.
+    """
     graph, grounder, probe = nodes
     assert graph.wait_for(lambda: probe.holds(message)), 'no OK diagnostic for the map'
     assert grounder.map_msg.header.stamp == message.header.stamp
@@ -256,10 +263,13 @@ def test_reground_on_map_change(nodes, reference):
 
 
 def test_a_rejected_instruction_drops_the_held_one(nodes, reference):
-    """README: "a rejected instruction drops the held instruction". With
-    reground_on_map_change, a held instruction is grounded again on each new map; after a
-    rejected instruction the next map gets no goal. Likewise an instruction waiting for a
-    map is dropped by a rejected one and never grounded."""
+    """
+    README: "a rejected instruction drops the held instruction".
+
+    With reground_on_map_change, a held instruction is grounded again on each new map; after a
+    rejected instruction the next map gets no goal. Likewise an instruction waiting for a map is
+    dropped by a rejected one and never grounded.
+    """
     graph, grounder, probe = nodes
     good_request(nodes, reference, world=0)
     grounder.set_parameters([Parameter('reground_on_map_change', value=True)])
@@ -299,8 +309,12 @@ def test_a_rejected_instruction_drops_the_held_one(nodes, reference):
 
 
 def test_empty_frame_id_takes_default_frame_id(nodes, reference):
-    """README: `default_frame_id` (default `map`) is the outputs' frame when the entity map's
-    frame_id is empty; a non-empty frame is passed through (good_request's "odom")."""
+    """
+    Check a claim of the README.
+
+    README: `default_frame_id` (default `map`) is the outputs' frame when the entity map's frame_id
+    is empty; a non-empty frame is passed through (good_request's "odom").
+    """
     graph, grounder, probe = nodes
     assert grounder.get_parameter('default_frame_id').value == 'map'
     try:
@@ -318,9 +332,12 @@ def test_empty_frame_id_takes_default_frame_id(nodes, reference):
 
 
 def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
-    """`ros2 param set ... value_map_encoding cost`: the next value_map has the goal cell at
-    0 and the worst cell at 100, each cell 100 minus its display value; `display` again
-    restores the best = 100 scale."""
+    """
+    Check `ros2 param set ... value_map_encoding cost`.
+
+    The next value_map has the goal cell at 0 and the worst cell at 100, each cell 100 minus its
+    display value; `display` again restores the best = 100 scale.
+    """
     graph, grounder, probe = nodes
     good_request(nodes, reference, world=1)  # display: best = 100 (checked there)
     shown = probe.value_maps[-1].data
@@ -341,8 +358,12 @@ def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
 
 
 class FailingModel(torch.nn.Module):
-    """A model whose forward raises as torch does when a map needs more memory than there
-    is (a real 256x256 request with a long instruction can; this one does it on demand)."""
+    """
+    Return a model whose forward raises as torch does when memory runs out.
+
+    A model whose forward raises as torch does when a map needs more memory than there
+    is (a real 256x256 request with a long instruction can; this one does it on demand).
+    """
 
     def forward(self, grids, tokens, return_aux=False):
         raise RuntimeError(
@@ -351,8 +372,12 @@ class FailingModel(torch.nn.Module):
 
 
 def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes, reference):
-    """README: "ERROR if the model fails": an exception in the model's forward is an ERROR
-    diagnostic and an error log line naming it, no goal, and the next request is answered."""
+    """
+    Check a claim of the README.
+
+    README: "ERROR if the model fails": an exception in the model's forward is an ERROR diagnostic
+    and an error log line naming it, no goal, and the next request is answered.
+    """
     graph, grounder, probe = nodes
     wait_held(nodes, probe.publish_map(WORLDS.grids[0]))
     model = grounder.grounder.model

@@ -1,6 +1,10 @@
-"""North is largest y: the grounder node's goal for the model's north lands at the top of
-the map in the map frame, through the full origin pose; and, with the packaged trained
-checkpoint, "two below X" and the extremes land on the cells they name."""
+"""
+North is largest y.
+
+The grounder node's goal for the model's north lands at the top of the map in the map frame,
+through the full origin pose; and, with the packaged trained checkpoint, "two below X" and the
+extremes land on the cells they name.
+"""
 
 import math
 
@@ -9,9 +13,8 @@ import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import make_probe, north_east_checkpoint, unique_namespace  # noqa: E402
+from grounder_helpers import make_probe, north_east_checkpoint, unique_namespace  # noqa: E402,I100
 from rclpy.parameter import Parameter  # noqa: E402
-
 from spatial_grounding_ros import generator  # noqa: E402
 from spatial_grounding_ros.entities import PUDDLEWORLD_NONUNIQUE  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
@@ -75,8 +78,12 @@ def test_model_north_is_largest_y(ros_context, tmp_path):
 
 
 def two_below_and_extreme_worlds(n=8):
-    """Generated 10x10 worlds, each with a "reach cell two below X" answer and both a
-    "northernmost" and a "southernmost" answer for some non-unique object."""
+    """
+    Return generated 10x10 worlds with answers that tell north from south.
+
+    Generated 10x10 worlds, each with a "reach cell two below X" answer and both a
+    "northernmost" and a "southernmost" answer for some non-unique object.
+    """
     rng = np.random.default_rng(11)
     worlds = []
     while len(worlds) < n:
@@ -96,10 +103,14 @@ def two_below_and_extreme_worlds(n=8):
 
 
 def test_trained_default_sends_the_goal_to_the_named_cell(ros_context):
-    """The packaged default through the node, on generated worlds: "reach cell two below X"
-    lands two cells south of X (2 m lower y on this 1 m grid), and "northernmost" and
-    "southernmost" land on the right objects, at larger and smaller y. The model's answers
-    must be right, not only consistent: a model that ignores "two below" fails here."""
+    """
+    The packaged default through the node, on generated worlds.
+
+    "reach cell two below X" lands two cells south of X (2 m lower y on this 1 m grid), and
+    "northernmost" and "southernmost" land on the right objects, at larger and smaller y. The
+    model's answers must be right, not only consistent: a model that ignores "two below" fails
+    here.
+    """
     graph = ros_context
     grounder, probe = start(
         graph, unique_namespace('orientation_trained')

@@ -1,21 +1,20 @@
 """Models: the paper's sizes, gradient flow into every module, batching, any map size."""
 
 import pytest
-import torch
-
 from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
 from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
 from spatial_grounding_ros.models import (
-    MODELS,
-    ModelConfig,
-    TRNet,
     build_model,
+    ModelConfig,
+    MODELS,
     neighbour_index,
     relation_param_count,
     relative_positions,
+    TRNet,
 )
 from spatial_grounding_ros.text import Vocabulary
+import torch
 
 
 def test_parameter_vector_sizes_are_the_papers():
@@ -122,8 +121,12 @@ def test_unknown_model_name():
 
 
 def test_no_python_loop_over_cells_cost_is_flat_in_batch():
-    """One batched call for 64 maps agrees with the same maps in one call of 1 each (above)
-    and its graph has a fixed number of nodes, whatever the map size."""
+    """
+    Check that one batched call for 64 maps agrees with 64 single calls.
+
+    One batched call for 64 maps agrees with the same maps in one call of 1 each (above)
+    and its graph has a fixed number of nodes, whatever the map size.
+    """
     model = build_model('t-rnet-attn', ModelConfig(vocab_size=5))
     counts = []
     for size in (4, 16):
@@ -140,10 +143,14 @@ def test_no_python_loop_over_cells_cost_is_flat_in_batch():
 
 
 def test_t_rnet_attn_at_zero_attention_is_t_rnet():
-    """README: the attention projection starts at zero, which makes t-RNetAttn exactly t-RNet
-    (uniform attention over the words, and the decoder is linear): so the warm-up may run
-    the attention-free forward. Same weights, same maps, padding included; and any non-zero
-    attention changes the answer (so the comparison can fail)."""
+    """
+    Check a claim of the README.
+
+    README: the attention projection starts at zero, which makes t-RNetAttn exactly t-RNet (uniform
+    attention over the words, and the decoder is linear): so the warm-up may run the attention-free
+    forward. Same weights, same maps, padding included; and any non-zero attention changes the
+    answer (so the comparison can fail).
+    """
     data, vocab, grids, tokens = _batch(n=6)
     cfg = ModelConfig(vocab_size=len(vocab))
     torch.manual_seed(0)
@@ -172,10 +179,14 @@ def test_t_rnet_attn_at_zero_attention_is_t_rnet():
 
 
 def test_word_matmuls_equal_per_pair_weights():
-    """README: each relation layer applies every word's weights to all pairs in one matmul and
-    mixes the results by attention, "same output" as building W_ij = sum_k alpha_ij(k) W(k)
-    per pair. Here the per-pair way is written out: the pair's h_ij = sum_k alpha_ij(k) h(k)
-    is decoded to its own 263 weights (the paper's formulation) and run through the MLP."""
+    """
+    Check a claim of the README.
+
+    README: each relation layer applies every word's weights to all pairs in one matmul and mixes
+    the results by attention, "same output" as building W_ij = sum_k alpha_ij(k) W(k) per pair.
+    Here the per-pair way is written out: the pair's h_ij = sum_k alpha_ij(k) h(k) is decoded to
+    its own 263 weights (the paper's formulation) and run through the MLP.
+    """
     data, vocab, grids, tokens = _batch(n=3)
     torch.manual_seed(1)
     model = build_model('t-rnet-attn', ModelConfig(vocab_size=len(vocab))).eval()

@@ -1,15 +1,17 @@
-"""The published results hold together: each shipped checkpoint evaluates to its row of
-results/value_map.json within what another CPU can change, the results/*.md tables are those
-rows, and the README's tables are the results/*.md files."""
+"""
+The published results hold together.
+
+Each shipped checkpoint evaluates to its row of results/value_map.json within what another CPU can
+change, the results/*.md tables are those rows, and the README's tables are the results/*.md files.
+"""
 
 import json
-import re
 from pathlib import Path
+import re
 
 import pytest
-
 from spatial_grounding_ros import cli
-from spatial_grounding_ros.checkpoints import PACKAGED_DIR, load_checkpoint
+from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / 'results'
@@ -29,7 +31,10 @@ def test_every_shipped_checkpoint_has_a_results_row():
 
 @pytest.mark.parametrize('checkpoint', SHIPPED)
 def test_shipped_checkpoint_evaluates_to_its_results_row(checkpoint, data_dir, capsys):
-    """`spatial-grounding eval --checkpoint <task>_<model> --task <task>` gives the row of
+    """
+    Check that `spatial-grounding eval` reproduces a row of value_map.json.
+
+    `spatial-grounding eval --checkpoint <task>_<model> --task <task>` gives the row of
     value_map.json written for that checkpoint (row and file found by name, nothing copied
     here), within what another CPU's rounding can change:
     - MD: a near-tie can flip one map's argmax, which moves that map's distance by at most
@@ -42,7 +47,8 @@ def test_shipped_checkpoint_evaluates_to_its_results_row(checkpoint, data_dir, c
       drop one sweep of score iteration on a map, which moves its mean score by under
       0.01 / cells: 1e-3 on the mean PQ is far above that and far below a model's change.
     - MSE: continuous, float32 rounding: 1e-4.
-    - n: exact."""
+    - n: exact.
+    """
     [row] = [r for r in value_map_rows() if r.get('checkpoint') == checkpoint]
     name = checkpoint.removesuffix('.pt')
     assert name == f'{row["task"]}_{row["model"]}'
@@ -83,8 +89,12 @@ def test_shipped_checkpoint_evaluates_to_its_results_row(checkpoint, data_dir, c
 
 
 def tables(text: str) -> list[list[list[str]]]:
-    """Every markdown table in `text`, as rows of stripped cells (header row first, the
-    --- row left out)."""
+    """
+    Return every markdown table in `text` as rows of stripped cells.
+
+    Every markdown table in `text`, as rows of stripped cells (header row first, the
+    --- row left out).
+    """
     found, current = [], []
     for line in text.splitlines() + ['']:
         if line.startswith('|'):
@@ -98,7 +108,7 @@ def tables(text: str) -> list[list[list[str]]]:
 
 
 def readme_section(heading: str) -> str:
-    """The README's text from `## heading` to the next `## `."""
+    """Return the README's text from `## heading` to the next `## `."""
     text = (REPO / 'README.md').read_text()
     start = text.index(f'\n## {heading}\n')
     end = text.find('\n## ', start + 1)
@@ -114,9 +124,13 @@ def readme_section(heading: str) -> str:
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):
-    """The table under the README heading with results/<file>'s header is that file's table
+    """
+    Check that the README's table of a results file is that file's table.
+
+    The table under the README heading with results/<file>'s header is that file's table
     cell for cell (and the file's caption line is there too): what `make reproduce` wrote is
-    what the README says."""
+    what the README says.
+    """
     source = (RESULTS / results_file).read_text()
     [expected] = tables(source)
     section = readme_section(heading)
@@ -141,8 +155,12 @@ def same_number(cell: str, value: float) -> bool:
 
 
 def test_value_map_table_is_the_json():
-    """results/value_map.md: one row per value_map.json run, its MSE, PQ and MD (and HIT
-    when there) that run's test metrics at the table's precision."""
+    """
+    Check results/value_map.md against value_map.json.
+
+    One row per value_map.json run, its MSE, PQ and MD (and HIT when there) that run's test metrics
+    at the table's precision.
+    """
     [table] = tables((RESULTS / 'value_map.md').read_text())
     runs = {(r['task'], r['model']): r for r in value_map_rows()}
     rows = rows_by_header(table)
@@ -156,8 +174,12 @@ def test_value_map_table_is_the_json():
 
 
 def test_rl_table_is_the_json():
-    """results/rl.md: one row per rl.json result, its PQ and MD (ours) that run's test
-    metrics at the table's precision, and its episodes."""
+    """
+    Check results/rl.md against rl.json.
+
+    One row per rl.json result, its PQ and MD (ours) that run's test metrics at the table's
+    precision, and its episodes.
+    """
     [table] = tables((RESULTS / 'rl.md').read_text())
     runs = {
         (r['task'], r['model']): r

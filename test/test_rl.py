@@ -1,27 +1,30 @@
-"""RL by fitted value iteration: the regression target follows the value convention, only
-visited cells are regressed, a tiny run beats the untrained model on the same maps, and
---via-ros, through a real gridworld node process, learns exactly what the in-process loop does."""
+"""
+RL by fitted value iteration.
+
+The regression target follows the value convention, only visited cells are regressed, a tiny run
+beats the untrained model on the same maps, and --via-ros, through a real gridworld node process,
+learns exactly what the in-process loop does.
+"""
 
 import json
 
 import numpy as np
 import pytest
-import torch
-
 from spatial_grounding_ros import cli
-from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.augment import mirror
+from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.rl import (
-    RLConfig,
-    ReplayBuffer,
     act,
     fitted_value_step,
+    ReplayBuffer,
     reproduce_rl,
+    RLConfig,
     train_rl,
 )
-from spatial_grounding_ros.text import Vocabulary, tokenize
+from spatial_grounding_ros.text import tokenize, Vocabulary
+import torch
 
 
 class ConstantMap(torch.nn.Module):
@@ -71,8 +74,12 @@ def test_fitted_value_target_uses_own_reward_and_target_max():
 
 
 def test_mirror_images_record_the_mirrored_worlds_rewards():
-    """Random play on one map fills its three mirror images with exactly the rewards and
-    goal of the mirrored world (augment.mirror), and swaps the instruction's directions."""
+    """
+    Check that random play on one map fills its three mirror images correctly.
+
+    Random play on one map fills its three mirror images with exactly the rewards and
+    goal of the mirrored world (augment.mirror), and swaps the instruction's directions.
+    """
     data = generate(3, seed=4, mode='local')
     env = GridWorldEnv(data, step_limit=60, order='sequential')
     buffer = ReplayBuffer((10, 10), mirrors=True)
@@ -103,11 +110,15 @@ def test_mirror_images_record_the_mirrored_worlds_rewards():
 
 
 def test_tiny_run_learns_and_writes_a_checkpoint(tmp_path):
-    """1024 episodes (a few seconds) lift PQ on 30 unseen generated maps well above the same
+    """
+    Check that 1024 episodes lift PQ well above the untrained model.
+
+    1024 episodes (a few seconds) lift PQ on 30 unseen generated maps well above the same
     model untrained: the same run with 0 episodes, which starts from the same seeded weights
     and evaluates on the same maps (PQ about 0 untrained, 0.77 trained). MSE must fall too:
     PQ alone also rises when only the puddles' -1 is learned (with the goal's +3 never
-    regressed, PQ still reached 0.73 while MSE rose from 1.70 to 1.83; trained: 1.20)."""
+    regressed, PQ still reached 0.73 while MSE rose from 1.70 to 1.83; trained: 1.20).
+    """
     train, test = generate(60, seed=1, mode='local'), generate(30, seed=2, mode='local')
     runs = {}
     for episodes in (0, 1024):
@@ -135,11 +146,15 @@ def test_tiny_run_learns_and_writes_a_checkpoint(tmp_path):
 
 
 def test_rl_train_via_ros_equals_the_in_process_run(tmp_path, capsys):
-    """`rl-train --via-ros` (episodes from a gridworld node process, over topics) learns
+    """
+    Check that `rl-train --via-ros` learns exactly what the in-process loop learns.
+
+    `rl-train --via-ros` (episodes from a gridworld node process, over topics) learns
     exactly what the in-process loop learns from the same episodes: the node's environment
     is seeded with --seed and plays one episode when it starts (which the client skips with
     next_episode), so an in-process environment seeded alike, after one reset, serves the
-    same maps, starts and rewards; every transition, metric and weight must then agree."""
+    same maps, starts and rewards; every transition, metric and weight must then agree.
+    """
     code = cli.main(
         [
             'rl-train',

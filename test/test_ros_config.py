@@ -1,26 +1,27 @@
-"""config/, launch/ and rviz/ checked without ROS launch or RViz (not on PyPI): the entity
-tables are the core's; each shipped params file holds every parameter its node declares,
-with the declared default, keyed so that it applies in any namespace, and loads with
-rclpy's parser; the launch files declare the arguments the README uses and start our nodes
-with those params files; the RViz config shows our topics. Config files are found from a
-path or by name."""
+"""
+config/, launch/ and rviz/ checked without ROS launch or RViz (not on PyPI).
+
+The entity tables are the core's; each shipped params file holds every parameter its node declares,
+with the declared default, keyed so that it applies in any namespace, and loads with rclpy's
+parser; the launch files declare the arguments the README uses and start our nodes with those
+params files; the RViz config shows our topics. Config files are found from a path or by name.
+"""
 
 import ast
 from pathlib import Path
 import re
 
 import pytest
-import yaml
-
 from spatial_grounding_ros.entities import EntityTable, ISI, PUDDLEWORLD
 from spatial_grounding_ros.ros.package_files import find_config
+import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 SHARE = {'call': 'get_package_share_directory', 'args': ['spatial_grounding_ros']}
 
 
 def lc(name: str) -> dict:
-    """A LaunchConfiguration(name), as launch_calls() reads it."""
+    """Return a LaunchConfiguration(name), as launch_calls() reads it."""
     return {'call': 'LaunchConfiguration', 'args': [name]}
 
 
@@ -44,9 +45,13 @@ def test_entity_tables_are_the_core_tables(name, table):
     'file, node_module', [('grounder.yaml', 'grounder_node'), ('gridworld.yaml', 'gridworld_node')]
 )
 def test_params_file_holds_every_declared_parameter_for_any_namespace(file, node_module):
-    """The shipped file is the node's declared defaults, keyed /**/<node> so that it applies
+    """
+    Check that the shipped file is the node's declared defaults.
+
+    The shipped file is the node's declared defaults, keyed /**/<node> so that it applies
     under -r __ns:=/robot1 too (test_ros_parameters starts nodes that way), and rclpy's own
-    parser reads it to the same values."""
+    parser reads it to the same values.
+    """
     from rclpy.parameter import parameter_dict_from_yaml_file, parameter_value_to_python
 
     name, parameters = node_parameters(node_module)
@@ -82,9 +87,12 @@ def test_find_config_by_path_and_by_name(tmp_path):
 
 
 def launch_calls(name: str) -> dict:
-    """A launch file's generate_launch_description() as plain data, from its syntax tree:
-    every call becomes {'call': name, 'args': [...], **keywords}, names resolve to their
-    module-level or local assignments, os.path.join to {'join': [parts]}, dicts to dicts."""
+    """
+    Return a launch file's generate_launch_description() as plain data, from its syntax tree.
+
+    Every call becomes {'call': name, 'args': [...], **keywords}, names resolve to their
+    module-level or local assignments, os.path.join to {'join': [parts]}, dicts to dicts.
+    """
     path = REPO / 'launch' / name
     tree = ast.parse(path.read_text(), str(path))
     names = {
@@ -147,9 +155,13 @@ def launch_parts(name: str):
 
 
 def check_our_node(node: dict, executable: str, params_argument: str) -> dict:
-    """A Node of our package: the console script, the name its params file is keyed by,
-    the namespace argument, the params file then the launch-argument overrides (names the
-    node declares), and the log level. Returns the overrides."""
+    """
+    Return a Node of our package.
+
+    The console script, the name its params file is keyed by, the namespace argument, the params
+    file then the launch-argument overrides (names the node declares), and the log level. Returns
+    the overrides.
+    """
     name, parameters = node_parameters(f'{executable}_node')
     assert node['package'] == 'spatial_grounding_ros' and node['executable'] == executable
     assert (
@@ -173,8 +185,11 @@ def check_default_params_file(argument: dict, file: str) -> None:
 
 
 def test_grounder_launch_file_arguments_and_node():
-    """`ros2 launch spatial_grounding_ros grounder.launch.py namespace:=... use_sim_time:=...
-    log_level:=... autostart:=... params_file:=...` reach the grounder."""
+    """
+    `ros2 launch spatial_grounding_ros grounder.launch.py namespace:=...
+
+    use_sim_time:=... log_level:=... autostart:=... params_file:=...` reach the grounder.
+    """
     arguments, [node] = launch_parts('grounder.launch.py')
     assert set(arguments) == {'namespace', 'params_file', 'use_sim_time', 'autostart', 'log_level'}
     defaults = {k: a['default_value'] for k, a in arguments.items() if k != 'params_file'}
@@ -217,8 +232,12 @@ def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
 
 
 def test_readme_launch_lines_use_the_declared_arguments():
-    """Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README passes
-    only arguments X declares (and the README shows both launch files)."""
+    """
+    Check the README's `ros2 launch` lines against the launch files' arguments.
+
+    Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README passes
+    only arguments X declares (and the README shows both launch files).
+    """
     seen = set()
     for line in (REPO / 'README.md').read_text().splitlines():
         match = re.match(r'ros2 launch spatial_grounding_ros (\S+\.launch\.py)(.*)', line)

@@ -1,29 +1,34 @@
-"""Node parameters as a ROS user meets them, over real DDS: the shipped params files apply
-under any namespace (the /**/<node> key), every parameter is declared with a descriptor,
-set_parameters refuses bad values and read-only ones with a reason, and an unknown name in a
-params file is a warning, not silence. (Start-up errors of the executables: the console and
-gridworld tests.)"""
+"""
+Node parameters as a ROS user meets them, over real DDS.
+
+The shipped params files apply under any namespace (the /**/<node> key), every parameter is
+declared with a descriptor, set_parameters refuses bad values and read-only ones with a reason, and
+an unknown name in a params file is a warning, not silence. (Start-up errors of the executables:
+the console and gridworld tests.)
+"""
 
 import pytest
 import yaml
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import unique_namespace  # noqa: E402
+from grounder_helpers import unique_namespace  # noqa: E402, I100
 from rcl_interfaces.msg import ParameterType  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter, parameter_value_to_python  # noqa: E402
 from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
-
-from spatial_grounding_ros.ros import grounder_node, gridworld_node  # noqa: E402
-from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
+from spatial_grounding_ros.ros import gridworld_node, grounder_node  # noqa: E402
 from spatial_grounding_ros.ros.gridworld_node import GridWorldNode  # noqa: E402
+from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 from spatial_grounding_ros.ros.package_files import find_config  # noqa: E402
 
 
 def shipped_copy(tmp_path, name: str, key: str | None = None, **changes):
-    """config/<name> with `changes` to its values, written to tmp_path; its node key as
-    shipped (or `key`)."""
+    """
+    config/<name> with `changes` to its values, written to tmp_path.
+
+    Its node key as shipped (or `key`).
+    """
     params = yaml.safe_load(find_config(name).read_text())
     [(shipped_key, section)] = params.items()
     section['ros__parameters'].update(changes)
@@ -33,7 +38,7 @@ def shipped_copy(tmp_path, name: str, key: str | None = None, **changes):
 
 
 def remote_parameters(graph, node_name: str) -> AsyncParameterClient:
-    """A parameter client of `node_name` on a node of its own (answers come over DDS)."""
+    """Return a parameter client of `node_name` on a node of its own (answers come over DDS)."""
     caller = graph.add(
         Node('parameter_caller', namespace=unique_namespace('caller'), context=graph.context)
     )
@@ -53,9 +58,13 @@ def remote_values(graph, client, names):
 
 
 def test_shipped_grounder_params_apply_under_a_namespace(ros_context, tmp_path):
-    """A grounder under /<run>/robot1 with the shipped grounder.yaml (its /**/spatial_grounder
+    """
+    Check that a namespaced grounder takes the shipped grounder.yaml.
+
+    A grounder under /<run>/robot1 with the shipped grounder.yaml (its /**/spatial_grounder
     key, one value changed) has that value; the old `spatial_grounder:` key would not reach
-    a namespaced node (the control)."""
+    a namespaced node (the control).
+    """
     graph = ros_context
     assert grounder_node.PARAMETERS[2].name == 'max_cells'
     assert grounder_node.PARAMETERS[2].default != 1234
@@ -142,8 +151,12 @@ def test_set_parameters_refuses_bad_and_read_only_values_with_a_reason(ros_conte
 
 @pytest.mark.parametrize('module', [grounder_node, gridworld_node])
 def test_every_parameter_is_described(ros_context, module):
-    """`ros2 param describe`: a description, the type, read_only for what only start-up
-    sets, and the range of each number, as the node declares them."""
+    """
+    Check what `ros2 param describe` shows.
+
+    A description, the type, read_only for what only start-up sets, and the range of each number,
+    as the node declares them.
+    """
     graph = ros_context
     namespace = unique_namespace('describe')
     if module is grounder_node:

@@ -1,5 +1,9 @@
-"""The reference suite: its numbers are the Python API's answers on the same worlds, its
-JSON has the documented shape, it writes the failure PNGs, and bad options are one line."""
+"""
+The reference suite.
+
+Its numbers are the Python API's answers on the same worlds, its JSON has the documented shape, it
+writes the failure PNGs, and bad options are one line.
+"""
 
 import json
 import subprocess
@@ -7,7 +11,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import suite
 from spatial_grounding_ros.generator import FAMILIES, family_goals
 from spatial_grounding_ros.grounder import Grounder

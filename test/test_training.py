@@ -1,22 +1,27 @@
-"""Supervised training's README rules, on real (tiny) training runs: the kept epoch is the
-second half's best validation PQ (ties: MSE), `--select mse` the lowest validation MSE of all
-epochs; validation holds out whole PuddleWorld worlds."""
+"""
+Supervised training's README rules, on real (tiny) training runs.
+
+The kept epoch is the second half's best validation PQ (ties: MSE), `--select mse` the lowest
+validation MSE of all epochs; validation holds out whole PuddleWorld worlds.
+"""
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import datasets
 from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.training import TrainConfig, train_supervised
+from spatial_grounding_ros.training import train_supervised, TrainConfig
 
 EPOCHS = 6
 
 
 def tiny_run(tmp_path, seed: int, select: str) -> dict:
-    """6 epochs of t-CNN on 160 generated worlds (no data download), at lr 0.05: too large
-    on purpose, so that validation swings from epoch to epoch as it does early in a real
-    run, and the epochs the rules pick differ. Returns the checkpoint's header."""
+    """
+    6 epochs of t-CNN on 160 generated worlds (no data download), at lr 0.05.
+
+    Too large on purpose, so that validation swings from epoch to epoch as it does early in a real
+    run, and the epochs the rules pick differ. Returns the checkpoint's header.
+    """
     tc = TrainConfig(
         epochs=EPOCHS,
         batch_size=16,
@@ -48,9 +53,13 @@ def tiny_run(tmp_path, seed: int, select: str) -> dict:
 
 
 def test_kept_epoch_is_the_second_halfs_best_validation_pq_or_the_lowest_mse(tmp_path):
-    """On runs whose best PQ of all epochs falls in the first half (found among the first
+    """
+    Check which epoch is kept when the best PQ falls in the first half.
+
+    On runs whose best PQ of all epochs falls in the first half (found among the first
     seeds), the kept epoch is still the second half's best PQ; with --select mse, on a run
-    whose lowest MSE falls in the first half, that first-half epoch is kept."""
+    whose lowest MSE falls in the first half, that first-half epoch is kept.
+    """
     seen = {'pq': False, 'mse': False}
     for seed in range(6):
         pq_run, mse_run = tiny_run(tmp_path, seed, 'pq'), tiny_run(tmp_path, seed, 'mse')
@@ -75,8 +84,12 @@ def test_kept_epoch_is_the_second_halfs_best_validation_pq_or_the_lowest_mse(tmp
 
 @pytest.mark.parametrize('task, worlds', [('pw-local', 54), ('pw-global', 117), ('pw', 171)])
 def test_puddleworld_validation_holds_out_whole_worlds(data_dir, task, worlds):
-    """README: validation is 10% of the training *worlds*, and no map is shared with
-    training: every instruction of a world falls on one side."""
+    """
+    Check a claim of the README.
+
+    README: validation is 10% of the training *worlds*, and no map is shared with training: every
+    instruction of a world falls on one side.
+    """
     data = datasets.load_task(task, 'train', data_dir)
     assert len(set(data.worlds)) == worlds
     train, val = datasets.split_by_world(data, 0.1, seed=0)

@@ -5,7 +5,6 @@ import pickle
 
 import numpy as np
 import pytest
-
 import reference
 from spatial_grounding_ros import world
 
@@ -76,12 +75,15 @@ def _row(rewards, goal):
 
 
 def test_score_iteration_by_hand_on_a_1x2_map():
-    """Goal (+3) on the right of a 1x2 map, uniform policy (all-ones map: 1/4 per move).
+    """
+    Goal (+3) on the right of a 1x2 map, uniform policy (all-ones map: 1/4 per move).
+
     Converged: S0 = 0.9 * (3/4 S0 + 1/4 * 3), so S0 = 0.675 / 0.325 and the mean score is
     (0.675 / 0.325 + 3) / 2 = 2.538. With the stopping rule: sweep 1 gives S = (0, 3)
     (change 3), then S0 = 0.675 + 0.675 S0 each sweep, a change of 0.675^(k-1) at sweep k;
     0.675^11 = 0.0133 and 0.675^12 = 0.0089 < 0.01, so sweep 13 is the last:
-    S0 = 0.675 (1 - 0.675^12) / 0.325 = 2.0583 and the mean is 2.529."""
+    S0 = 0.675 (1 - 0.675^12) / 0.325 = 2.0583 and the mean is 2.529.
+    """
     rewards, terminal = _row([0, 3], 1)
     uniform = np.ones((1, 1, 2))
     converged = world.policy_scores(uniform, rewards, terminal, tol=1e-12)[0]
@@ -93,12 +95,15 @@ def test_score_iteration_by_hand_on_a_1x2_map():
 
 
 def test_score_iteration_by_hand_with_a_puddle_and_on_a_1x3_map():
-    """Puddle (-1) left of the goal on a 1x2 map, uniform policy:
-    S0 = -1 + 0.9 * (3/4 S0 + 1/4 * 3) = -0.325 + 0.675 S0, so S0 = -1, which sweep 2
-    already reaches exactly (sweep 1: S0 = -1 + 0.9 * 0 = -1): mean (-1 + 3) / 2 = 1.
-    A 1x3 map, goal on the right, uniform policy, converged: S0 = 0.9 (3/4 S0 + 1/4 S1) and
-    S1 = 0.9 (1/2 S1 + 1/4 S0 + 1/4 * 3), so S0 = 9/13 S1 and S1 (0.55 - 0.225 * 9/13) = 0.675:
-    S1 = 0.675 * 13 / 5.125 = 1.71220, S0 = 1.18537, mean (S0 + S1 + 3) / 3 = 1.96585."""
+    """
+    Puddle (-1) left of the goal on a 1x2 map, uniform policy.
+
+    S0 = -1 + 0.9 * (3/4 S0 + 1/4 * 3) = -0.325 + 0.675 S0, so S0 = -1, which sweep 2 already
+    reaches exactly (sweep 1: S0 = -1 + 0.9 * 0 = -1): mean (-1 + 3) / 2 = 1. A 1x3 map, goal on
+    the right, uniform policy, converged: S0 = 0.9 (3/4 S0 + 1/4 S1) and S1 = 0.9 (1/2 S1 + 1/4 S0
+    + 1/4 * 3), so S0 = 9/13 S1 and S1 (0.55 - 0.225 * 9/13) = 0.675: S1 = 0.675 * 13 / 5.125 =
+    1.71220, S0 = 1.18537, mean (S0 + S1 + 3) / 3 = 1.96585.
+    """
     rewards, terminal = _row([-1, 3], 1)
     assert world.policy_scores(np.ones((1, 1, 2)), rewards, terminal)[0] == 1.0
     rewards, terminal = _row([0, 0, 3], 2)
@@ -111,13 +116,17 @@ def test_score_iteration_by_hand_with_a_puddle_and_on_a_1x3_map():
 
 
 def test_pq_by_hand_on_a_1x2_map():
-    """PQ = (score(pred) - score(uniform)) / (score(true) - score(uniform)), all with the
+    """
+    Check PQ = (score(pred) - score(uniform)) / (score(true) - score(uniform)).
+
+    PQ = (score(pred) - score(uniform)) / (score(true) - score(uniform)), all with the
     stopping rule. True map (2.7, 3): from cell 0, p = P(right) = e^3 / (3 e^2.7 + e^3)
     = 1 / (1 + 3 e^-0.3) = 0.31032; with q = 0.9 (1 - p), sweep k >= 2 changes S0 by
     2.7 p q^(k-2), below 0.01 first at k = 12, so S0 = 2.7 p (1 - q^11) / (1 - q) = 2.1974
     and the mean is 2.5987. A peaked map (0, 100) moves right for sure: S0 = 2.7, mean 2.85.
     Uniform (above): 2.52917. PQ = (2.85 - 2.52917) / (2.59870 - 2.52917) = 4.614: a map
-    sharper than the truth scores above 1, which "1 for the truth" alone would not show."""
+    sharper than the truth scores above 1, which "1 for the truth" alone would not show.
+    """
     rewards, terminal = _row([0, 3], 1)
     true = world.value_iteration(rewards, terminal)
     np.testing.assert_allclose(true, [[[2.7, 3.0]]])
@@ -136,8 +145,12 @@ def test_pq_by_hand_on_a_1x2_map():
 
 
 def test_score_iteration_equals_a_cell_by_cell_reference():
-    """world.policy_scores (batched numpy) against test/reference.py's loops over cells, on
-    random 5x5 and 4x7 maps with puddles, a goal in a puddle among them, stopping rule included."""
+    """
+    Check world.policy_scores against test/reference.py's loops over cells.
+
+    world.policy_scores (batched numpy) against test/reference.py's loops over cells, on
+    random 5x5 and 4x7 maps with puddles, a goal in a puddle among them, stopping rule included.
+    """
     rng = np.random.default_rng(0)
     for shape in [(5, 5), (4, 7)]:
         for n in range(4):

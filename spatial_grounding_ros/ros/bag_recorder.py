@@ -1,4 +1,5 @@
-"""Record topics to a rosbag2 MCAP bag without the ros2 CLI, as `ros2 bag record` would.
+"""
+Record topics to a rosbag2 MCAP bag without the ros2 CLI, as `ros2 bag record` would.
 
 Subscriptions with raw=True hand over the serialized CDR bytes, which bags.BagWriter stores
 unchanged. Each message's log_time is its reception time from the middleware (the message
@@ -37,8 +38,12 @@ def message_class(msgtype: str):
 
 
 def offered_qos(endpoint: TopicEndpointInfo):
-    """A publisher's QoS as the graph reports it (history and depth are not discovered:
-    'unknown' and 0, as `ros2 bag record` stores them too) -> a rosbags Qos."""
+    """
+    Return a publisher's QoS as the graph reports it.
+
+    A publisher's QoS as the graph reports it (history and depth are not discovered:
+    'unknown' and 0, as `ros2 bag record` stores them too) -> a rosbags Qos.
+    """
     from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability
 
     q = endpoint.qos_profile
@@ -57,8 +62,11 @@ def offered_qos(endpoint: TopicEndpointInfo):
 
 
 class BagRecorder(Node):
-    """Writes every message of `topics` ({name: 'pkg/msg/Type'}) to a new bag at `path`;
-    names in `latched` are subscribed transient local."""
+    """
+    Writes every message of `topics` ({name: 'pkg/msg/Type'}) to a new bag at `path`.
+
+    Names in `latched` are subscribed transient local.
+    """
 
     def __init__(
         self,
@@ -114,7 +122,8 @@ class BagRecorder(Node):
 
 
 class RecordingThread:
-    """A BagRecorder spinning in a thread of its own (same rclpy context as the caller).
+    """
+    A BagRecorder spinning in a thread of its own (same rclpy context as the caller).
 
     recording = RecordingThread(path, topics, latched, namespace='/demo')
     ...

@@ -1,6 +1,9 @@
-"""End-to-end ROS latency for `spatial-grounding bench`: the grounder node runs as its own
-process (as deployed); a client node in this process holds one entity map on the topic and
-times each instruction from publish() to the goal_pose callback."""
+"""
+End-to-end ROS latency for `spatial-grounding bench`.
+
+The grounder node runs as its own process (as deployed); a client node in this process holds one
+entity map on the topic and times each instruction from publish() to the goal_pose callback.
+"""
 
 from __future__ import annotations
 
@@ -10,10 +13,10 @@ import subprocess
 import threading
 import time
 
-import numpy as np
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import numpy as np
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Header, String
@@ -74,8 +77,12 @@ def round_trip_latency(
     warmup: int = 20,
     progress=None,
 ) -> dict:
-    """p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
-    grounder process's RSS after the warm-up and at the end."""
+    """
+    Measure p50/p99 instruction -> goal_pose latency and the grounder's RSS.
+
+    p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
+    grounder process's RSS after the warm-up and at the end.
+    """
     # loopback only, and a domain of its own unless the caller chose one (both processes)
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(1, 100)))

@@ -1,4 +1,5 @@
-"""Conversions between grids / value maps and ROS messages. Pure functions, no node.
+"""
+Conversions between grids / value maps and ROS messages. Pure functions, no node.
 
 Orientation (DESIGN "ROS interface"): a data-set grid's row 0 is the north (top) row, while
 an OccupancyGrid's row index grows with +y (row 0 sits at the map origin). So data-set row r
@@ -11,10 +12,10 @@ from __future__ import annotations
 import array
 import math
 
-import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose, PoseStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid
+import numpy as np
 from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 
 from ..bags import multiarray_to_map
@@ -62,7 +63,10 @@ def check_map_info(info: MapMetaData, max_cells: int) -> None:
 
 
 def occupancy_grid_to_grid(msg: OccupancyGrid, max_cells: int) -> np.ndarray:
-    """An entity map message -> (H, W) int64 grid, row 0 = north. ValueError on bad input.
+    """
+    Convert an entity map message to a (H, W) int64 grid, row 0 = north.
+
+    ValueError on bad input.
 
     Entity values are not checked here: that needs the entity table (Grounder.check_grid).
     """
@@ -87,8 +91,12 @@ def map_info(
     origin: tuple[float, float] = (0.0, 0.0),
     yaw: float = 0.0,
 ) -> MapMetaData:
-    """Meta data of a (H, W) grid: `origin` is the (x, y) of the south-west corner, `yaw` the
-    rotation of the grid's x axis (east) in the map frame."""
+    """
+    Meta data of a (H, W) grid.
+
+    `origin` is the (x, y) of the south-west corner, `yaw` the rotation of the grid's x axis (east)
+    in the map frame.
+    """
     info = MapMetaData()
     info.height, info.width = int(shape[0]), int(shape[1])
     info.resolution = float(resolution)
@@ -101,9 +109,11 @@ def map_info(
 def grid_to_occupancy_grid(
     grid: np.ndarray, header: Header, info: MapMetaData | None = None
 ) -> OccupancyGrid:
-    """A (H, W) grid of entity indices (row 0 = north) -> an entity map message.
+    """
+    Convert a (H, W) grid of entity indices (row 0 = north) to an entity map message.
 
-    `info` defaults to map_info(grid.shape) (1 m cells, origin at 0, 0)."""
+    `info` defaults to map_info(grid.shape) (1 m cells, origin at 0, 0).
+    """
     grid = np.asarray(grid)
     if grid.min(initial=0) < -128 or grid.max(initial=0) > 127:
         raise ValueError('entity indices must fit an OccupancyGrid cell (int8)')
@@ -121,7 +131,8 @@ def _scaled_grid(percent: np.ndarray, header: Header, info: MapMetaData) -> Occu
 def value_map_to_occupancy_grid(
     values: np.ndarray, header: Header, info: MapMetaData, encoding: str = 'display'
 ) -> OccupancyGrid:
-    """A value map (row 0 = north) -> OccupancyGrid, min..max scaled to 0..100.
+    """
+    Convert a value map (row 0 = north) to an OccupancyGrid, min..max scaled to 0..100.
 
     `display`: the best cell is 100, the worst 0 (a constant map is all 0), for a colour
     ramp in RViz. `cost`: the reverse, best 0 and worst 100 (a constant map is all 0), as a
@@ -142,16 +153,23 @@ def value_map_to_occupancy_grid(
 def magnitude_to_occupancy_grid(
     values: np.ndarray, header: Header, info: MapMetaData
 ) -> OccupancyGrid:
-    """|values| (row 0 = north) scaled so the largest magnitude is 100 and 0 stays 0: the
-    paper's |Z1| relation-map view."""
+    """
+    |values| (row 0 = north) scaled so the largest magnitude is 100 and 0 stays 0.
+
+    The paper's |Z1| relation-map view.
+    """
     magnitude = np.abs(np.asarray(values, dtype=np.float64))
     top = magnitude.max()
     return _scaled_grid(magnitude / top * PERCENT if top > 0 else magnitude, header, info)
 
 
 def value_map_to_float32_multiarray(values: np.ndarray) -> Float32MultiArray:
-    """Exact values, row-major (height, width) in the OccupancyGrid's cell order (row 0 at
-    the map origin, i.e. south), so index i matches value_map.data[i]."""
+    """
+    Return exact values, row-major (height, width), in the OccupancyGrid's cell order.
+
+    Exact values, row-major (height, width) in the OccupancyGrid's cell order (row 0 at
+    the map origin, i.e. south), so index i matches value_map.data[i].
+    """
     values = np.asarray(values, dtype=np.float32)[::-1]
     height, width = values.shape
     msg = Float32MultiArray()
@@ -185,7 +203,8 @@ def cell_centre(cell: tuple[int, int], info: MapMetaData) -> tuple[float, float,
 def cell_to_pose(
     cell: tuple[int, int], info: MapMetaData, frame_id: str, stamp: Time
 ) -> PoseStamped:
-    """A goal at the centre of data-set cell (row, col), stamped `stamp`.
+    """
+    Return a goal at the centre of data-set cell (row, col), stamped `stamp`.
 
     Orientation is the identity in `frame_id` (facing the frame's +x, not the grid's east
     when the origin is rotated): the instruction names a place, not a heading.

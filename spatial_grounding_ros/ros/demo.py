@@ -1,9 +1,12 @@
-"""The closed-loop demo: the gridworld and grounder nodes run as real processes in a namespace
-of their own; the grounder answers each episode's instruction with a goal_pose, the gridworld
-walks its agent there cell by cell. A recorder in a thread of its own records every topic to
-an MCAP bag (log_time at reception, whatever this thread is doing); this thread watches the
-topics, prints one line per episode and a summary (also computed back from the bag with
-eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+"""
+The closed-loop demo.
+
+The gridworld and grounder nodes run as real processes in a namespace of their own; the grounder
+answers each episode's instruction with a goal_pose, the gridworld walks its agent there cell by
+cell. A recorder in a thread of its own records every topic to an MCAP bag (log_time at reception,
+whatever this thread is doing); this thread watches the topics, prints one line per episode and a
+summary (also computed back from the bag with eval-bag), and draws a PNG per episode (map,
+predicted values, |Z1|, the path taken).
 
 The gridworld publishes its first episode only once the grounder, the recorder and the
 watcher all subscribe to `instruction`, so each hears it live: no episode is restarted.
@@ -12,28 +15,28 @@ watcher all subscribe to `instruction`, so each hears it live: no episode is res
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-import numpy as np
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import numpy as np
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Bool, Float32, Float32MultiArray, String
 from std_srvs.srv import Trigger
 
-from ..bags import evaluate_bag
-from ..entities import PUDDLEWORLD
-from ..plots import plot_grounding
 from . import convert
 from .bag_recorder import RecordingThread
 from .gridworld_node import LATCHED, STEPS
 from .node_support import stop_processes
+from ..bags import evaluate_bag
+from ..entities import PUDDLEWORLD
+from ..plots import plot_grounding
 
 RECORDED = {  # topic -> type; the first six are latched
     'entity_map': 'nav_msgs/msg/OccupancyGrid',
@@ -63,7 +66,7 @@ LATCHED_TOPICS = {
 
 
 def executable(name: str) -> list[str]:
-    """The console script next to this Python (a venv's bin), else `python -m`."""
+    """Return the console script next to this Python (a venv's bin), else `python -m`."""
     script = Path(sys.executable).parent / name
     if script.is_file():
         return [str(script)]
@@ -122,8 +125,11 @@ class DemoWatcher(Node):
         }
 
     def moves_complete(self) -> bool:
-        """Every move seen so far (a pose after the start) has its reward and terminated flag
-        too: they come on other topics and may trail the pose."""
+        """
+        Every move seen so far (a pose after the start) has its reward and terminated flag too.
+
+        They come on other topics and may trail the pose.
+        """
         moves = len(self.poses) - 1
         return moves >= 0 and len(self.rewards) >= moves and self.terminated_msgs >= moves
 
@@ -140,8 +146,12 @@ class DemoWatcher(Node):
 
 
 def spin_until(executor, condition, timeout: float, what: str, processes=()) -> None:
-    """Spin until `condition()`; TimeoutError after `timeout`, RuntimeError as soon as one of
-    `processes` ({log path: Popen}) has exited, with the last line of its log."""
+    """
+    Spin until `condition()`.
+
+    TimeoutError after `timeout`, RuntimeError as soon as one of `processes` ({log path: Popen})
+    has exited, with the last line of its log.
+    """
     deadline = time.monotonic() + timeout
     while not condition():
         for log, process in dict(processes).items():
@@ -331,9 +341,9 @@ def run_demo(
             log.close()
     summary = {
         'episodes': len(lines),
-        'reached': sum(l['reached'] for l in lines),
-        'md': float(np.mean([l['md'] for l in lines])) if lines else None,
-        'reward': float(np.mean([l['reward'] for l in lines])) if lines else None,
+        'reached': sum(line['reached'] for line in lines),
+        'md': float(np.mean([line['md'] for line in lines])) if lines else None,
+        'reward': float(np.mean([line['reward'] for line in lines])) if lines else None,
         'bag': str(bag_path),
         'from_bag': evaluate_bag(bag_path).metrics(),
         'recorded': recorded,

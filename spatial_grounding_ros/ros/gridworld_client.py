@@ -1,6 +1,8 @@
-"""A GridWorldEnv-shaped client of the gridworld node, so rl.py's loop runs unchanged
-through topics: reset() calls next_episode and reads entity_map, instruction and agent_pose;
-step() publishes an action and waits for that move's agent_pose, reward and terminated.
+"""
+A GridWorldEnv-shaped client of the gridworld node, so rl.py's loop runs unchanged through topics.
+
+reset() calls next_episode and reads entity_map, instruction and agent_pose; step() publishes an
+action and waits for that move's agent_pose, reward and terminated.
 
 Messages of different topics may arrive in any order, so the client pairs them by count:
 the node publishes exactly one agent_pose, reward and terminated per move.
@@ -14,9 +16,9 @@ import subprocess
 import sys
 import time
 
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import rclpy
 from rclpy.node import Node
 from std_msgs.msg import Bool, Float32, Int32, String
 from std_srvs.srv import Trigger
@@ -115,8 +117,12 @@ class GridWorldClient(Node):
 
 @contextlib.contextmanager
 def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
-    """Start a gridworld node process serving `task`'s train split (or the same generated
-    worlds as `train`) in a namespace of its own, and yield one client environment."""
+    """
+    Start a gridworld node process serving `task`'s train split.
+
+    Start a gridworld node process serving `task`'s train split (or the same generated
+    worlds as `train`) in a namespace of its own, and yield one client environment.
+    """
     namespace = f'/rl_{os.getpid()}'
     step_limit = cfg.step_limit or 5 * max(train.grids.shape[1:])
     params = {

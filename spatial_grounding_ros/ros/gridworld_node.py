@@ -1,5 +1,7 @@
-"""The gridworld node (`ros2 run spatial_grounding_ros gridworld`): a simulated
-PuddleWorld/ISI-style world over topics, a thin adapter over env.GridWorldEnv.
+"""
+The gridworld node (`ros2 run spatial_grounding_ros gridworld`).
+
+A simulated PuddleWorld/ISI-style world over topics, a thin adapter over env.GridWorldEnv.
 
 Each episode publishes the entity map and the instruction (transient local, what the grounder
 node listens to), the agent's start pose, and, for evaluation only, the true goal, the true
@@ -25,10 +27,10 @@ from std_msgs.msg import Bool, Float32, Float32MultiArray, Header, Int32, String
 from std_srvs.srv import Trigger
 
 from . import convert
+from .node_support import declare_parameters, Param, report, spin
 from .. import world
 from ..datasets import SPLITS, TASKS
 from ..env import GridWorldEnv, load_episodes
-from .node_support import declare_parameters, Param, report, spin
 
 NODE_NAME = 'gridworld'
 LATCHED = QoSProfile(
@@ -288,9 +290,13 @@ class GridWorldNode(Node):
         self.report('goal_pose', DiagnosticStatus.OK, f'walking from {self.env.agent} to {cell}')
 
     def path_values(self, cell: tuple[int, int]) -> np.ndarray:
-        """Minus the cost to reach `cell`: 1 per move, 1.5 into an obstacle (puddle), so the
-        walk takes a shortest path and goes round puddles when that is no longer. (The task's
-        discounted values would rather stay out of a puddle forever than cross it.)"""
+        """
+        Minus the cost to reach `cell`.
+
+        1 per move, 1.5 into an obstacle (puddle), so the walk takes a shortest path and goes round
+        puddles when that is no longer. (The task's discounted values would rather stay out of a
+        puddle forever than cross it.)
+        """
         cost = np.where(self.obstacles[self.env.example], -1.5, -1.0)
         terminal = np.zeros(cost.shape, bool)
         cost[cell], terminal[cell] = 0.0, True

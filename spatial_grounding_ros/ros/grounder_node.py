@@ -1,5 +1,7 @@
-"""The grounder node (`ros2 run spatial_grounding_ros grounder`): a lifecycle node over
-spatial_grounding_ros.grounder.Grounder.
+"""
+The grounder node (`ros2 run spatial_grounding_ros grounder`).
+
+A lifecycle node over spatial_grounding_ros.grounder.Grounder.
 
 Lifecycle (as Nav2's servers): configure loads and checks the checkpoint and the entity
 table and creates the topics; activate starts grounding; deactivate stops it (no goal is
@@ -36,11 +38,11 @@ from std_msgs.msg import Float32MultiArray, Header, String
 import torch
 
 from . import convert
+from .node_support import declare_parameters, Param, report, spin
+from .package_files import find_config
 from ..checkpoints import resolve_checkpoint
 from ..entities import EntityTable
 from ..grounder import DEFAULT_CHECKPOINT, Grounder
-from .node_support import declare_parameters, Param, report, spin
-from .package_files import find_config
 
 NODE_NAME = 'spatial_grounder'
 # Like /map: a late subscriber (RViz, this node) still gets the latest map.
@@ -142,9 +144,13 @@ class GrounderNode(LifecycleNode):
         return self.get_parameter(name).value
 
     def guard_change_state(self) -> None:
-        """Answer a change_state request for a transition the current state does not have
+        """
+        Answer a change_state request for a transition the current state does not have.
+
+        Answer a change_state request for a transition the current state does not have
         (activate while unconfigured, ...) with success false, as rclcpp does: rclpy raises
-        in the service callback, which would end the node's spin."""
+        in the service callback, which would end the node's spin.
+        """
         service = getattr(self, '_service_change_state', None)
         if service is None:  # made with enable_communication_interface=False
             return

@@ -1,5 +1,8 @@
-"""What both executables share: declared and checked parameters, a diagnostic that is also
-logged, and a main() that spins one node and shuts down cleanly.
+"""
+What both executables share.
+
+Declared and checked parameters, a diagnostic that is also logged, and a main() that spins one node
+and shuts down cleanly.
 
 Start-up errors (a bad parameter value or type, checkpoint, entity table or params file) are
 one line `<name>: error: ...` on stderr and exit status 1.
@@ -34,8 +37,12 @@ TYPE_NAMES = {bool: 'a bool', int: 'an integer', float: 'a double', str: 'a stri
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter of a node: its default (whose Python type is the parameter's type),
-    what it means, and what values it takes."""
+    """
+    One parameter of a node.
+
+    Its default (whose Python type is the parameter's type), what it means, and what values it
+    takes.
+    """
 
     name: str
     default: bool | int | float | str
@@ -47,11 +54,11 @@ class Param:
     non_empty: bool = False  # a string that must not be empty
 
     @property
-    def type(self) -> type:
+    def type(self) -> type:  # noqa: A003
         return type(self.default)
 
     def constraints(self) -> str:
-        """The rule as words, for `ros2 param describe` and error messages."""
+        """Return the rule as words, for `ros2 param describe` and error messages."""
         if self.choices:
             return 'one of ' + ', '.join(self.choices)
         if self.non_empty:
@@ -90,7 +97,7 @@ class Param:
         return descriptor
 
     def problem(self, value) -> str | None:
-        """What is wrong with `value` for this parameter, or None."""
+        """Return what is wrong with `value` for this parameter, or None."""
         # bool is an int in Python: compare exact types
         if type(value) is not self.type:
             hint = ' (write 5.0, not 5)' if self.type is float and type(value) is int else ''
@@ -113,7 +120,8 @@ class Param:
 
 
 def declare_parameters(node: Node, params: Iterable[Param]) -> None:
-    """Declare `params` on `node` with descriptors and refuse bad values.
+    """
+    Declare `params` on `node` with descriptors and refuse bad values.
 
     At start-up a bad value or type from a params file or `-p` raises ValueError (one line,
     naming the parameter); later, `set_parameters` refuses it with the same reason (and

@@ -1,4 +1,5 @@
-"""Find the package's config files wherever it is installed.
+"""
+Find the package's config files wherever it is installed.
 
 Order: a path that exists as given; the ament index share directory
 (share/spatial_grounding_ros/config of a colcon install, when ament_index_python is
@@ -8,8 +9,8 @@ available and the package is on AMENT_PREFIX_PATH); the source tree (an editable
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
+import sys
 
 PACKAGE = 'spatial_grounding_ros'
 SOURCE_ROOT = Path(__file__).resolve().parents[2]
@@ -32,8 +33,11 @@ def share_dirs() -> list[Path]:
 
 
 def find_config(name: str | Path) -> Path:
-    """`name` if it is an existing file, else config/<name> in the first share directory
-    that has it. FileNotFoundError lists where it looked."""
+    """
+    `name` if it is an existing file, else config/<name> in the first share directory that has it.
+
+    FileNotFoundError lists where it looked.
+    """
     path = Path(name).expanduser()
     if path.is_file():
         return path
