@@ -1,6 +1,16 @@
-"""ament_python package: `colcon build` installs the node executables into
-lib/spatial_grounding_ros (where `ros2 run` looks); `pip install -e .` makes the same
-entry points console scripts in a virtual environment."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+ament_python package.
+
+`colcon build` installs the node executables into lib/spatial_grounding_ros (where `ros2 run`
+looks); `pip install -e .` makes the same entry points console scripts in a virtual environment.
+"""
+
 from glob import glob
 
 from setuptools import find_packages, setup
@@ -32,6 +42,6 @@ setup(
             'spatial-grounding = spatial_grounding_ros.cli:main',
             'grounder = spatial_grounding_ros.ros.grounder_node:main',
             'gridworld = spatial_grounding_ros.ros.gridworld_node:main',
-        ],
+        ]
     },
 )

@@ -1,12 +1,23 @@
-"""Mirror augmentation: a map flipped left-right (or top-bottom), with the direction words of
-its instruction swapped, is another correct example: the grid MDP is symmetric under both
-flips, so the flipped value map is exactly the value map of the flipped world.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Mirror augmentation.
+
+A map flipped left-right (or top-bottom), with the direction words of its instruction swapped, is
+another correct example: the grid MDP is symmetric under both flips, so the flipped value map is
+exactly the value map of the flipped world.
 
 Human instructions use many spellings; the tables below cover every direction word that
 occurs at least twice in PuddleWorld or ISI train (misspellings map to the right opposite). A
 word the tables miss leaves that mirrored example mislabeled, so the tables err on
 completeness. Some direction words also have non-directional uses ("pick up", "right next
-to"); NOT_DIRECTIONS keeps those as they are."""
+to"); NOT_DIRECTIONS keeps those as they are.
+"""
+
 from __future__ import annotations
 
 import numpy as np
@@ -25,40 +36,120 @@ def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:
 
 # Mirror columns: west <-> east. Misspellings map to the correct opposite.
 SWAP_LEFT_RIGHT = _pairs(
-    ("left", "right"), ("leftmost", "rightmost"), ("west", "east"), ("western", "eastern"),
-    ("westernmost", "easternmost"), ("westmost", "eastmost"), ("eastermost", "westernmost"),
-    ("eaternmost", "westernmost"), ("northwest", "northeast"), ("southwest", "southeast"),
-    ("northwestern", "northeastern"), ("southwestern", "southeastern"),
-    ("northwesternmost", "northeasternmost"), ("southwesternmost", "southeasternmost"),
-    ("lefthand", "righthand"), ("westward", "eastward"), ("westermost", "easternmost"),
-    ("eastenmost", "westernmost"), ("mosteastern", "mostwestern"), ("topright", "topleft"),
-    ("bottomright", "bottomleft"))
+    ('left', 'right'),
+    ('leftmost', 'rightmost'),
+    ('west', 'east'),
+    ('western', 'eastern'),
+    ('westernmost', 'easternmost'),
+    ('westmost', 'eastmost'),
+    ('eastermost', 'westernmost'),
+    ('eaternmost', 'westernmost'),
+    ('northwest', 'northeast'),
+    ('southwest', 'southeast'),
+    ('northwestern', 'northeastern'),
+    ('southwestern', 'southeastern'),
+    ('northwesternmost', 'northeasternmost'),
+    ('southwesternmost', 'southeasternmost'),
+    ('lefthand', 'righthand'),
+    ('westward', 'eastward'),
+    ('westermost', 'easternmost'),
+    ('eastenmost', 'westernmost'),
+    ('mosteastern', 'mostwestern'),
+    ('topright', 'topleft'),
+    ('bottomright', 'bottomleft'),
+)
 # Mirror rows: north <-> south.
 SWAP_UP_DOWN = _pairs(
-    ("above", "below"), ("up", "down"), ("top", "bottom"), ("topmost", "bottommost"),
-    ("upper", "lower"), ("uppermost", "lowermost"), ("highest", "lowest"), ("higher", "lower"),
-    ("north", "south"), ("northern", "southern"), ("northernmost", "southernmost"),
-    ("northmost", "southmost"), ("upmost", "downmost"), ("over", "under"),
-    ("bellow", "above"), ("beneath", "above"), ("underneath", "above"), ("bottomost", "topmost"),
-    ("southernest", "northernmost"), ("northwest", "southwest"), ("northeast", "southeast"),
-    ("northwestern", "southwestern"), ("northeastern", "southeastern"),
-    ("northeasternmost", "southeasternmost"), ("northwesternmost", "southwesternmost"),
-    ("low", "high"), ("northest", "southernmost"), ("southermost", "northernmost"),
-    ("underneeth", "above"), ("topright", "bottomright"), ("topleft", "bottomleft"),
-    ("upward", "downward"), ("upwards", "downwards"), ("tops", "bottoms"), ("atop", "below"),
-    ("ontop", "below"), ("blow", "above"), ("belows", "above"))
+    ('above', 'below'),
+    ('up', 'down'),
+    ('top', 'bottom'),
+    ('topmost', 'bottommost'),
+    ('upper', 'lower'),
+    ('uppermost', 'lowermost'),
+    ('highest', 'lowest'),
+    ('higher', 'lower'),
+    ('north', 'south'),
+    ('northern', 'southern'),
+    ('northernmost', 'southernmost'),
+    ('northmost', 'southmost'),
+    ('upmost', 'downmost'),
+    ('over', 'under'),
+    ('bellow', 'above'),
+    ('beneath', 'above'),
+    ('underneath', 'above'),
+    ('bottomost', 'topmost'),
+    ('southernest', 'northernmost'),
+    ('northwest', 'southwest'),
+    ('northeast', 'southeast'),
+    ('northwestern', 'southwestern'),
+    ('northeastern', 'southeastern'),
+    ('northeasternmost', 'southeasternmost'),
+    ('northwesternmost', 'southwesternmost'),
+    ('low', 'high'),
+    ('northest', 'southernmost'),
+    ('southermost', 'northernmost'),
+    ('underneeth', 'above'),
+    ('topright', 'bottomright'),
+    ('topleft', 'bottomleft'),
+    ('upward', 'downward'),
+    ('upwards', 'downwards'),
+    ('tops', 'bottoms'),
+    ('atop', 'below'),
+    ('ontop', 'below'),
+    ('blow', 'above'),
+    ('belows', 'above'),
+)
 
 # Uses of direction words that are not directions, so no flip changes them: the word keeps
 # its spelling after any of its `after` words, or before any of its `before` words or word
 # pairs. ISI blocks are "picked up", "lined up with" others and put "right next to" them.
 # "right above" stays a direction: PuddleWorld's "one to the right below the tree" is one.
 NOT_DIRECTIONS = {
-    "up": {"after": {"pick", "picks", "picked", "picking", "line", "lines", "lined", "lining",
-                     "match", "matches", "matched", "end", "ends", "ended"}, "before": set()},
-    "right": {"after": set(),
-              "before": {"next", "on top", "beside", "besides", "in", "at", "between", "against",
-                         "behind", "alongside", "atop", "near", "by", "where", "there", "here",
-                         "now", "adjacent", "touching", "directly", "immediately"}},
+    'up': {
+        'after': {
+            'pick',
+            'picks',
+            'picked',
+            'picking',
+            'line',
+            'lines',
+            'lined',
+            'lining',
+            'match',
+            'matches',
+            'matched',
+            'end',
+            'ends',
+            'ended',
+        },
+        'before': set(),
+    },
+    'right': {
+        'after': set(),
+        'before': {
+            'next',
+            'on top',
+            'beside',
+            'besides',
+            'in',
+            'at',
+            'between',
+            'against',
+            'behind',
+            'alongside',
+            'atop',
+            'near',
+            'by',
+            'where',
+            'there',
+            'here',
+            'now',
+            'adjacent',
+            'touching',
+            'directly',
+            'immediately',
+        },
+    },
 }
 
 
@@ -70,36 +161,40 @@ MIRROR_IMAGES = ((1,), (0,), (1, 0))
 
 
 def swap_words(text: str, table: dict[str, str]) -> str:
-    """The instruction's tokens with each direction word replaced by its mirror image."""
+    """Return the instruction's tokens with each direction word replaced by its mirror image."""
     words = tokenize(text)
     out = []
     for i, word in enumerate(words):
         keep = NOT_DIRECTIONS.get(word)
-        if keep and ((i > 0 and words[i - 1] in keep["after"])
-                     or " ".join(words[i + 1:i + 2]) in keep["before"]
-                     or " ".join(words[i + 1:i + 3]) in keep["before"]):
+        if keep and (
+            (i > 0 and words[i - 1] in keep['after'])
+            or ' '.join(words[i + 1:i + 2]) in keep['before']
+            or ' '.join(words[i + 1:i + 3]) in keep['before']
+        ):
             out.append(word)
         else:
             out.append(table.get(word, word))
-    return " ".join(out)
+    return ' '.join(out)
 
 
 def mirror_instruction(text: str, axes: tuple[int, ...]) -> str:
-    """The instruction of a map flipped over `axes` (map axes, see SWAP_TABLES)."""
+    """Return the instruction of a map flipped over `axes` (map axes, see SWAP_TABLES)."""
     for axis in axes:
         text = swap_words(text, SWAP_TABLES[axis])
     return text
 
 
-def mirror_cell(cell: tuple[int, int], shape: tuple[int, int], axes: tuple[int, ...]) -> tuple[int, int]:
+def mirror_cell(
+    cell: tuple[int, int], shape: tuple[int, int], axes: tuple[int, ...]
+) -> tuple[int, int]:
     """Where `cell` of an (H, W) map lands when the map is flipped over `axes`."""
     return tuple(n - 1 - c if a in axes else c for a, (c, n) in enumerate(zip(cell, shape)))
 
 
 def mirror(data: GroundingSet, axis: int) -> GroundingSet:
-    """axis 2: left-right (columns), axis 1: top-bottom (rows), of the (N, H, W) arrays."""
+    """Mirror the (N, H, W) arrays; axis 2: left-right (columns), axis 1: top-bottom (rows)."""
     if axis not in (1, 2):
-        raise ValueError(f"mirror axis must be 1 (rows) or 2 (columns), not {axis}")
+        raise ValueError(f'mirror axis must be 1 (rows) or 2 (columns), not {axis}')
     table = SWAP_TABLES[axis - 1]
 
     def flip(a: np.ndarray) -> np.ndarray:
@@ -108,13 +203,21 @@ def mirror(data: GroundingSet, axis: int) -> GroundingSet:
     goals = data.goals.copy()
     size = data.grids.shape[axis]
     goals[:, axis - 1] = size - 1 - goals[:, axis - 1]
-    return GroundingSet(f"{data.name} mirrored", data.entities, flip(data.grids),
-                        [swap_words(t, table) for t in data.instructions], flip(data.values),
-                        flip(data.rewards), flip(data.terminal), goals, list(data.worlds))
+    return GroundingSet(
+        f'{data.name} mirrored',
+        data.entities,
+        flip(data.grids),
+        [swap_words(t, table) for t in data.instructions],
+        flip(data.values),
+        flip(data.rewards),
+        flip(data.terminal),
+        goals,
+        list(data.worlds),
+    )
 
 
 def with_mirrors(data: GroundingSet) -> GroundingSet:
-    """The data set plus its MIRROR_IMAGES: left-right, top-bottom and both ways (4x)."""
+    """Return the data set plus its MIRROR_IMAGES: left-right, top-bottom and both ways (4x)."""
     images = []
     for axes in MIRROR_IMAGES:
         image = data

@@ -1,5 +1,14 @@
-"""rosbag2 (MCAP) bags without rclpy, with the `rosbags` library: a writer for the recorder,
-and `spatial-grounding eval-bag`, which scores the goals recorded in a bag.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+rosbag2 (MCAP) bags without rclpy, with the `rosbags` library.
+
+A writer for the recorder, and `spatial-grounding eval-bag`, which scores the goals recorded in a
+bag.
 
 Bags are written as `ros2 bag record -s mcap` of Jazzy writes them: rosbag2 metadata version
 9, `ros_distro: jazzy`, MCAP storage with the Jazzy type store's message definitions, each
@@ -14,11 +23,12 @@ entity_map's geometry (resolution, origin) as of the answer. MD is the mean Manh
 distance in cells; with value_map_raw, true_value_map and true_reward_map recorded too, PQ and
 MSE are computed as world.evaluate_maps does (the goal cell is the terminal one).
 """
+
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import json
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -29,77 +39,112 @@ STORE = 'ROS2_JAZZY'
 ROS_DISTRO = 'jazzy'
 BAG_VERSION = 9
 TOPICS = {  # role -> default topic name (relative names match any namespace)
-    'instruction': 'instruction', 'goal': 'goal_pose', 'truth': 'true_goal',
-    'map': 'entity_map', 'values': 'value_map_raw', 'true_values': 'true_value_map',
+    'instruction': 'instruction',
+    'goal': 'goal_pose',
+    'truth': 'true_goal',
+    'map': 'entity_map',
+    'values': 'value_map_raw',
+    'true_values': 'true_value_map',
     'true_rewards': 'true_reward_map',
 }
 MSGTYPES = {
-    'instruction': 'std_msgs/msg/String', 'goal': 'geometry_msgs/msg/PoseStamped',
-    'truth': 'geometry_msgs/msg/PoseStamped', 'map': 'nav_msgs/msg/OccupancyGrid',
-    'values': 'std_msgs/msg/Float32MultiArray', 'true_values': 'std_msgs/msg/Float32MultiArray',
+    'instruction': 'std_msgs/msg/String',
+    'goal': 'geometry_msgs/msg/PoseStamped',
+    'truth': 'geometry_msgs/msg/PoseStamped',
+    'map': 'nav_msgs/msg/OccupancyGrid',
+    'values': 'std_msgs/msg/Float32MultiArray',
+    'true_values': 'std_msgs/msg/Float32MultiArray',
     'true_rewards': 'std_msgs/msg/Float32MultiArray',
 }
 REQUIRED = ('instruction', 'goal', 'truth', 'map')
 
 
 def typestore():
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
 
     return get_typestore(getattr(Stores, STORE))
 
 
-INFINITE_NS = 2 ** 63 - 1  # RMW_DURATION_INFINITE, as rclpy reports it
+INFINITE_NS = 2**63 - 1  # RMW_DURATION_INFINITE, as rclpy reports it
 
 
 def duration(ns: int):
-    """A rosbags QosTime of `ns` nanoseconds (infinite = 9223372036 s 854775807 ns)."""
+    """Return a rosbags QosTime of `ns` nanoseconds (infinite = 9223372036 s 854775807 ns)."""
     from rosbags.interfaces import QosTime
 
-    sec, nsec = divmod(int(ns), 10 ** 9)
+    sec, nsec = divmod(int(ns), 10**9)
     return QosTime(sec=sec, nsec=nsec)
 
 
 def qos(latched: bool, depth: int = 1000):
-    """A stand-in QoS profile for a topic whose publishers are unknown (a bag written from
+    """
+    Return a stand-in QoS profile for a topic whose publishers are unknown.
+
+    A stand-in QoS profile for a topic whose publishers are unknown (a bag written from
     messages, not recorded): transient local for latched topics, so `ros2 bag play` offers
-    them latched again."""
-    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
-                                    QosReliability)
+    them latched again.
+    """
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability
 
     infinite = duration(INFINITE_NS)
-    return Qos(history=QosHistory.KEEP_LAST, depth=1 if latched else depth,
-               reliability=QosReliability.RELIABLE,
-               durability=QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
-               deadline=infinite, lifespan=infinite, liveliness=QosLiveliness.AUTOMATIC,
-               liveliness_lease_duration=infinite, avoid_ros_namespace_conventions=False)
+    return Qos(
+        history=QosHistory.KEEP_LAST,
+        depth=1 if latched else depth,
+        reliability=QosReliability.RELIABLE,
+        durability=QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
+        deadline=infinite,
+        lifespan=infinite,
+        liveliness=QosLiveliness.AUTOMATIC,
+        liveliness_lease_duration=infinite,
+        avoid_ros_namespace_conventions=False,
+    )
 
 
 def _jazzy_writer_classes():
-    """rosbags' rosbag2 Writer and its MCAP storage, with what rosbags 0.11 leaves out and
+    """
+    Build rosbags' rosbag2 Writer and MCAP storage, completed as Jazzy's MCAP plugin writes.
+
+    rosbags' rosbag2 Writer and its MCAP storage, with what rosbags 0.11 leaves out and
     rosbag2's Jazzy MCAP plugin writes: each channel's `topic_type_hash` beside
     `offered_qos_profiles`, a message's publish_time apart from its log_time, and
     `ros_distro: jazzy` (rosbags writes `rosbags`) in the bag's metadata, both the embedded
-    copy and metadata.yaml."""
+    copy and metadata.yaml.
+    """
     from io import BytesIO
 
-    import yaml
     from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.rosbag2.storage_mcap import (Channel, McapWriter, write_channel,
-                                              write_record, write_string, write_uint16,
-                                              write_uint32, write_uint64)
+    from rosbags.rosbag2.storage_mcap import (
+        Channel,
+        McapWriter,
+        write_channel,
+        write_record,
+        write_string,
+        write_uint16,
+        write_uint32,
+        write_uint64,
+    )
+    import yaml
 
     class JazzyMcapWriter(McapWriter):
         publish_time: int | None = None  # of the next message; None: its log_time
 
         def add_connection(self, connection, offered_qos_profiles: str) -> None:
             metadata = BytesIO()
-            for key, value in (('offered_qos_profiles', offered_qos_profiles),
-                               ('topic_type_hash', connection.digest)):
+            for key, value in (
+                ('offered_qos_profiles', offered_qos_profiles),
+                ('topic_type_hash', connection.digest),
+            ):
                 write_string(metadata, key)
                 write_string(metadata, value)
-            self.channels.append(Channel(connection.id, connection.msgtype, connection.topic,
-                                         connection.ext.serialization_format,
-                                         metadata.getvalue()))
+            self.channels.append(
+                Channel(
+                    connection.id,
+                    connection.msgtype,
+                    connection.topic,
+                    connection.ext.serialization_format,
+                    metadata.getvalue(),
+                )
+            )
             self.channel_stats[connection.id] = 0
             write_channel(self.chunk.bio, self.channels[-1], self.schemas)
 
@@ -113,12 +158,12 @@ def _jazzy_writer_classes():
             self.chunk.msgs[connection.id].append((timestamp, self.chunk.bio.tell()))
             record = BytesIO()
             write_uint16(record, connection.id)
-            write_uint32(record, 0)              # sequence
-            write_uint64(record, timestamp)      # log_time: when the recorder received it
-            write_uint64(record, publish_time)   # publish_time: when it was sent
+            write_uint32(record, 0)  # sequence
+            write_uint64(record, timestamp)  # log_time: when the recorder received it
+            write_uint64(record, publish_time)  # publish_time: when it was sent
             record.write(data)
             write_record(self.chunk.bio, 0x05, record)
-            if self.chunk.bio.tell() > 2 ** 20:
+            if self.chunk.bio.tell() > 2**20:
                 self.close_chunk()
 
         def close(self, version: int, metadata: str) -> None:
@@ -139,7 +184,8 @@ def _jazzy_writer_classes():
 
 
 class BagWriter:
-    """Serialized (CDR) messages into a new rosbag2 MCAP bag directory.
+    """
+    Serialized (CDR) messages into a new rosbag2 MCAP bag directory.
 
         with BagWriter("run1") as bag:
             bag.write("/gridworld/instruction", "std_msgs/msg/String", t_ns, cdr_bytes)
@@ -171,17 +217,32 @@ class BagWriter:
             self.writer.close()
             self.writer = None
 
-    def write(self, topic: str, msgtype: str, timestamp_ns: int, data: bytes, *,
-              publish_time_ns: int | None = None, offered_qos: list | None = None,
-              type_hash: str | None = None) -> None:
-        """Store one message; `timestamp_ns` is its log_time (reception), `publish_time_ns`
-        when it was sent (default: the same)."""
+    def write(
+        self,
+        topic: str,
+        msgtype: str,
+        timestamp_ns: int,
+        data: bytes,
+        *,
+        publish_time_ns: int | None = None,
+        offered_qos: list | None = None,
+        type_hash: str | None = None,
+    ) -> None:
+        """
+        Store one message.
+
+        `timestamp_ns` is its log_time (reception), `publish_time_ns` when it was sent (default:
+        the same).
+        """
         if topic not in self.connections:
             msgdef, _ = self.store.generate_msgdef(msgtype, ros_version=2)
             self.connections[topic] = self.writer.add_connection(
-                topic, msgtype, msgdef=msgdef,
+                topic,
+                msgtype,
+                msgdef=msgdef,
                 rihs01=type_hash or self.store.hash_rihs01(msgtype),
-                offered_qos_profiles=offered_qos or [qos(topic in self.latched)])
+                offered_qos_profiles=offered_qos or [qos(topic in self.latched)],
+            )
             self.counts[topic] = 0
         storage = self.writer.storage
         storage.publish_time = None if publish_time_ns is None else int(publish_time_ns)
@@ -197,8 +258,11 @@ class BagWriter:
 
 
 def open_bag(path: str | Path):
-    """A rosbags Reader over a bag directory (or its .mcap/.db3 file), opened. Clear errors
-    for a missing path or something that is not a readable rosbag2 bag."""
+    """
+    Return a rosbags Reader over a bag directory (or its .mcap/.db3 file), opened.
+
+    Clear errors for a missing path or something that is not a readable rosbag2 bag.
+    """
     from rosbags.rosbag2 import Reader
 
     path = Path(path)
@@ -206,8 +270,10 @@ def open_bag(path: str | Path):
         raise FileNotFoundError(f'{path}: bag not found')
     if path.is_file():
         if not (path.parent / 'metadata.yaml').is_file():
-            raise ValueError(f'{path}: not a rosbag2 bag (a bag is a directory with '
-                             'metadata.yaml and .mcap or .db3 files)')
+            raise ValueError(
+                f'{path}: not a rosbag2 bag (a bag is a directory with '
+                'metadata.yaml and .mcap or .db3 files)'
+            )
         path = path.parent
     if not (path / 'metadata.yaml').is_file():
         raise ValueError(f'{path}: not a rosbag2 bag (no metadata.yaml)')
@@ -215,14 +281,19 @@ def open_bag(path: str | Path):
         reader = Reader(path)
         reader.open()
     except Exception as exc:  # rosbags raises its own error types and OSError/KeyError on junk
-        raise ValueError(f'{path}: not a readable rosbag2 bag '
-                         f'({type(exc).__name__}: {exc})') from exc
+        raise ValueError(
+            f'{path}: not a readable rosbag2 bag ({type(exc).__name__}: {exc})'
+        ) from exc
     return reader
 
 
 def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[str, str]:
-    """role -> topic in the bag. An absolute name must match exactly; a relative one matches
-    a topic ending in /name (any namespace). Ambiguity is an error naming the candidates."""
+    """
+    Map each role to its topic in the bag.
+
+    An absolute name must match exactly; a relative one matches a topic ending in /name (any
+    namespace). Ambiguity is an error naming the candidates.
+    """
     found = {}
     for role, name in wanted.items():
         if name.startswith('/'):
@@ -230,20 +301,28 @@ def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[st
         else:
             matches = [t for t in available if t == '/' + name or t.endswith('/' + name)]
         if len(matches) > 1:
-            raise ValueError(f"several topics match {name!r} ({', '.join(sorted(matches))}): "
-                             f"pass the full name with --{role.replace('_', '-')}-topic")
+            raise ValueError(
+                f'several topics match {name!r} ({", ".join(sorted(matches))}): '
+                f'pass the full name with --{role.replace("_", "-")}-topic'
+            )
         if matches:
             topic = matches[0]
             if available[topic] != MSGTYPES[role]:
-                raise ValueError(f'topic {topic} has type {available[topic]}, expected '
-                                 f'{MSGTYPES[role]} for the {role} topic')
+                raise ValueError(
+                    f'topic {topic} has type {available[topic]}, expected '
+                    f'{MSGTYPES[role]} for the {role} topic'
+                )
             found[role] = topic
     return found
 
 
 def _cell(x: float, y: float, info) -> tuple[int, int] | None:
-    """Data-set (row, col) (row 0 = north) of map-frame point (x, y) for an OccupancyGrid's
-    info (ros/convert.point_to_cell's convention, for planar yaw-only origins, without rclpy)."""
+    """
+    Return the data-set (row, col) of a map-frame point (x, y).
+
+    Data-set (row, col) (row 0 = north) of map-frame point (x, y) for an OccupancyGrid's
+    info (ros/convert.point_to_cell's convention, for planar yaw-only origins, without rclpy).
+    """
     o, p = info.origin.orientation, info.origin.position
     yaw = math.atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z))
     dx, dy = x - p.x, y - p.y
@@ -255,11 +334,16 @@ def _cell(x: float, y: float, info) -> tuple[int, int] | None:
 
 
 def multiarray_to_map(msg) -> np.ndarray:
-    """A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
-    row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike."""
+    """
+    Convert a Float32MultiArray in OccupancyGrid cell order to (H, W) float32, row 0 north.
+
+    A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
+    row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike.
+    """
     if len(msg.layout.dim) != 2:
-        raise ValueError('expected a 2-D Float32MultiArray layout, got '
-                         f'{len(msg.layout.dim)} dims')
+        raise ValueError(
+            f'expected a 2-D Float32MultiArray layout, got {len(msg.layout.dim)} dims'
+        )
     h, w = msg.layout.dim[0].size, msg.layout.dim[1].size
     data = np.asarray(msg.data, dtype=np.float32)[msg.layout.data_offset:]
     if data.size != h * w:
@@ -280,7 +364,7 @@ class Episode:
 @dataclass
 class BagEvaluation:
     episodes: list[Episode] = field(default_factory=list)
-    unanswered: int = 0          # instructions without a goal_pose (or without a truth)
+    unanswered: int = 0  # instructions without a goal_pose (or without a truth)
     topics: dict = field(default_factory=dict)
 
     def metrics(self) -> dict:
@@ -291,8 +375,14 @@ class BagEvaluation:
         md = [abs(e.goal[0] - e.truth[0]) + abs(e.goal[1] - e.truth[1]) for e in self.episodes]
         out['md'] = float(np.mean(md))
         out['hit'] = float(np.mean([d == 0 for d in md]))  # the goal_pose is the true goal cell
-        full = [e for e in self.episodes if e.values is not None and e.true_values is not None
-                and e.true_rewards is not None and e.values.shape == e.true_values.shape]
+        full = [
+            e
+            for e in self.episodes
+            if e.values is not None
+            and e.true_values is not None
+            and e.true_rewards is not None
+            and e.values.shape == e.true_values.shape
+        ]
         if full and len({e.values.shape for e in full}) == 1:
             pred = np.stack([e.values for e in full])
             true = np.stack([e.true_values for e in full])
@@ -316,19 +406,22 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
         missing = [r for r in REQUIRED if r not in found]
         if missing:
             raise ValueError(
-                f"{path}: bag has no "
-                f"{', '.join(f'{r} topic ({wanted[r]!r}, {MSGTYPES[r]})' for r in missing)}; "
-                f"it has: {', '.join(sorted(available)) or 'no topics'}")
+                f'{path}: bag has no '
+                f'{", ".join(f"{r} topic ({wanted[r]!r}, {MSGTYPES[r]})" for r in missing)}; '
+                f'it has: {", ".join(sorted(available)) or "no topics"}'
+            )
         store = typestore()
         role_of = {t: r for r, t in found.items()}
         events = []  # (time, role, message)
         try:
-            for conn, t, raw in reader.messages([c for c in reader.connections
-                                                 if c.topic in role_of]):
+            for conn, t, raw in reader.messages(
+                [c for c in reader.connections if c.topic in role_of]
+            ):
                 events.append((t, role_of[conn.topic], store.deserialize_cdr(raw, conn.msgtype)))
         except Exception as exc:  # truncated or corrupt chunks
-            raise ValueError(f'{path}: bag is truncated or corrupt '
-                             f'({type(exc).__name__}: {exc})') from exc
+            raise ValueError(
+                f'{path}: bag is truncated or corrupt ({type(exc).__name__}: {exc})'
+            ) from exc
     finally:
         reader.close()
     events.sort(key=lambda e: e[0])
@@ -342,8 +435,10 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
         cells = None
         if p['goal'] is not None and p['truth'] is not None and p['map'] is not None:
             info = p['map'].info
-            cells = (_cell(p['goal'].pose.position.x, p['goal'].pose.position.y, info),
-                     _cell(p['truth'].pose.position.x, p['truth'].pose.position.y, info))
+            cells = (
+                _cell(p['goal'].pose.position.x, p['goal'].pose.position.y, info),
+                _cell(p['truth'].pose.position.x, p['truth'].pose.position.y, info),
+            )
         if cells is None or None in cells:
             result.unanswered += 1
             return
@@ -364,35 +459,52 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
             truths.append(msg)
         elif role == 'instruction':
             finish(pending)
-            pending = {'instruction': msg.data, 'goal': None, 'truth': None, 'map': None,
-                       'values': None, 'true': {}}
+            pending = {
+                'instruction': msg.data,
+                'goal': None,
+                'truth': None,
+                'map': None,
+                'values': None,
+                'true': {},
+            }
         elif pending is None:
             continue
         elif role == 'values' and pending['values'] is None:
             pending['values'] = msg
         elif role == 'goal' and pending['goal'] is None:
-            pending.update(goal=msg, truth=truths[-1] if truths else None, map=latest_map,
-                           true=dict(latest_true))
+            pending.update(
+                goal=msg,
+                truth=truths[-1] if truths else None,
+                map=latest_map,
+                true=dict(latest_true),
+            )
             truths = []
     finish(pending)
     return result
 
 
 def cmd_eval_bag(args) -> int:
-    topics = {role: getattr(args, f'{role}_topic') for role in TOPICS
-              if getattr(args, f'{role}_topic') is not None}
+    topics = {
+        role: getattr(args, f'{role}_topic')
+        for role in TOPICS
+        if getattr(args, f'{role}_topic') is not None
+    }
     metrics = evaluate_bag(args.bag, topics).metrics()
     if args.json:
         print(json.dumps({'bag': str(args.bag), **metrics}))
     elif metrics['n'] == 0:
-        print(f'{args.bag}: no answered instruction with a recorded truth '
-              f"({metrics['unanswered']} unanswered)")
+        print(
+            f'{args.bag}: no answered instruction with a recorded truth '
+            f'({metrics["unanswered"]} unanswered)'
+        )
     else:
-        line = (f"{args.bag}: {metrics['n']} answered instructions, MD {metrics['md']:.2f}, "
-                f"HIT {metrics['hit']:.3f}")
+        line = (
+            f'{args.bag}: {metrics["n"]} answered instructions, MD {metrics["md"]:.2f}, '
+            f'HIT {metrics["hit"]:.3f}'
+        )
         if 'pq' in metrics:
-            line += f", PQ {metrics['pq']:.3f}, MSE {metrics['mse']:.3f}"
-        print(line + f" ({metrics['unanswered']} unanswered)")
+            line += f', PQ {metrics["pq"]:.3f}, MSE {metrics["mse"]:.3f}'
+        print(line + f' ({metrics["unanswered"]} unanswered)')
     return 0
 
 
@@ -400,7 +512,10 @@ def register_cli(sub) -> None:
     p = sub.add_parser('eval-bag', help='score the goals recorded in a rosbag2 bag (MD, PQ, MSE)')
     p.add_argument('bag', help='bag directory (or its .mcap file)')
     for role, name in TOPICS.items():
-        p.add_argument(f"--{role.replace('_', '-')}-topic", default=None,
-                       help=f'{MSGTYPES[role]} topic (default: {name!r} in any namespace)')
+        p.add_argument(
+            f'--{role.replace("_", "-")}-topic',
+            default=None,
+            help=f'{MSGTYPES[role]} topic (default: {name!r} in any namespace)',
+        )
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.set_defaults(func=cmd_eval_bag)

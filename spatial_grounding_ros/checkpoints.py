@@ -1,6 +1,17 @@
-"""Checkpoints: `torch.save` of {header, state_dict}. The header is plain data (model name,
-hyper-parameters, vocabulary, entity table, training data, metrics), so loading works with
-`weights_only=True`, and any mismatch is a clear error at load time, not a crash later."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Checkpoints: `torch.save` of {header, state_dict}.
+
+The header is plain data (model name, hyper-parameters, vocabulary, entity table, training data,
+metrics), so loading works with `weights_only=True`, and any mismatch is a clear error at load
+time, not a crash later.
+"""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -10,11 +21,11 @@ import torch
 from torch import nn
 
 from .entities import EntityTable
-from .models import MODELS, ModelConfig, build_model
+from .models import build_model, ModelConfig, MODELS
 from .text import Vocabulary
 
-FORMAT = "spatial_grounding_ros/1"
-PACKAGED_DIR = Path(__file__).resolve().parent / "checkpoints"
+FORMAT = 'spatial_grounding_ros/1'
+PACKAGED_DIR = Path(__file__).resolve().parent / 'checkpoints'
 
 
 @dataclass
@@ -26,69 +37,97 @@ class Loaded:
 
     @property
     def name(self) -> str:
-        return self.header["model"]
+        return self.header['model']
 
 
-def save_checkpoint(path: str | Path, model_name: str, model: nn.Module, cfg: ModelConfig,
-                    vocab: Vocabulary, entities: EntityTable, **info) -> Path:
+def save_checkpoint(
+    path: str | Path,
+    model_name: str,
+    model: nn.Module,
+    cfg: ModelConfig,
+    vocab: Vocabulary,
+    entities: EntityTable,
+    **info,
+) -> Path:
     """Write a checkpoint; `info` (task, training data, metrics, ...) goes into the header."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    header = {"format": FORMAT, "model": model_name, "config": cfg.to_dict(),
-              "vocabulary": list(vocab.words), "entities": entities.to_dict(), **info}
-    torch.save({"header": header, "state_dict": model.state_dict()}, path)
+    header = {
+        'format': FORMAT,
+        'model': model_name,
+        'config': cfg.to_dict(),
+        'vocabulary': list(vocab.words),
+        'entities': entities.to_dict(),
+        **info,
+    }
+    torch.save({'header': header, 'state_dict': model.state_dict()}, path)
     return path
 
 
 def resolve_checkpoint(name: str | Path) -> Path:
-    """A path, or the name of a packaged checkpoint (`pw_t-rnet-attn` or `pw_t-rnet-attn.pt`)."""
+    """
+    Resolve a path, or the name of a packaged checkpoint.
+
+    Packaged names: `pw_t-rnet-attn` or `pw_t-rnet-attn.pt`.
+    """
     path = Path(name)
     if path.is_file():
         return path
-    packaged = PACKAGED_DIR / (path.name if path.suffix == ".pt" else f"{path.name}.pt")
+    packaged = PACKAGED_DIR / (path.name if path.suffix == '.pt' else f'{path.name}.pt')
     if packaged.is_file():
         return packaged
-    raise FileNotFoundError(f"{name}: checkpoint not found (neither a file nor a packaged "
-                            f"checkpoint in {PACKAGED_DIR})")
+    raise FileNotFoundError(
+        f'{name}: checkpoint not found (neither a file nor a packaged '
+        f'checkpoint in {PACKAGED_DIR})'
+    )
 
 
-def load_checkpoint(name: str | Path, expect_model: str | None = None,
-                    expect_entities: EntityTable | None = None) -> Loaded:
+def load_checkpoint(
+    name: str | Path, expect_model: str | None = None, expect_entities: EntityTable | None = None
+) -> Loaded:
     path = resolve_checkpoint(name)
     try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
+        blob = torch.load(path, map_location='cpu', weights_only=True)
     except Exception as exc:  # torch raises many types on a corrupt or foreign file
         # torch's own text runs to several lines (and suggests weights_only=False): keep one
-        reason = (str(exc).strip().splitlines() or [""])[0][:120]
-        raise ValueError(f"{path}: not a readable checkpoint ({type(exc).__name__}: {reason})") from exc
-    if not isinstance(blob, dict) or "header" not in blob or "state_dict" not in blob:
-        raise ValueError(f"{path}: not a spatial_grounding_ros checkpoint (no header)")
-    header = blob["header"]
-    if header.get("format") != FORMAT:
-        raise ValueError(f"{path}: checkpoint format {header.get('format')!r}, expected {FORMAT!r}")
-    name_ = header.get("model")
+        reason = (str(exc).strip().splitlines() or [''])[0][:120]
+        raise ValueError(
+            f'{path}: not a readable checkpoint ({type(exc).__name__}: {reason})'
+        ) from exc
+    if not isinstance(blob, dict) or 'header' not in blob or 'state_dict' not in blob:
+        raise ValueError(f'{path}: not a spatial_grounding_ros checkpoint (no header)')
+    header = blob['header']
+    if header.get('format') != FORMAT:
+        raise ValueError(
+            f'{path}: checkpoint format {header.get("format")!r}, expected {FORMAT!r}'
+        )
+    name_ = header.get('model')
     if name_ not in MODELS:
-        raise ValueError(f"{path}: unknown model {name_!r} in checkpoint")
+        raise ValueError(f'{path}: unknown model {name_!r} in checkpoint')
     if expect_model is not None and name_ != expect_model:
-        raise ValueError(f"{path}: checkpoint holds model {name_!r}, not {expect_model!r}")
-    entities = EntityTable.from_dict(header["entities"])
+        raise ValueError(f'{path}: checkpoint holds model {name_!r}, not {expect_model!r}')
+    entities = EntityTable.from_dict(header['entities'])
     if expect_entities is not None and entities.names != expect_entities.names:
-        raise ValueError(f"{path}: checkpoint was trained on the {entities.domain} entity table "
-                         f"({len(entities)} kinds), not on {expect_entities.domain} "
-                         f"({len(expect_entities)} kinds)")
-    vocab = Vocabulary(header["vocabulary"][2:])
+        raise ValueError(
+            f'{path}: checkpoint was trained on the {entities.domain} entity table '
+            f'({len(entities)} kinds), not on {expect_entities.domain} '
+            f'({len(expect_entities)} kinds)'
+        )
+    vocab = Vocabulary(header['vocabulary'][2:])
     try:
-        cfg = ModelConfig.from_dict(header["config"])
+        cfg = ModelConfig.from_dict(header['config'])
     except (TypeError, ValueError) as exc:  # a field missing, or one this code does not know
-        raise ValueError(f"{path}: {exc}") from exc
+        raise ValueError(f'{path}: {exc}') from exc
     if cfg.vocab_size != len(vocab) or cfg.n_entities != len(entities):
-        raise ValueError(f"{path}: header sizes disagree (vocabulary {len(vocab)} vs "
-                         f"{cfg.vocab_size}, entities {len(entities)} vs {cfg.n_entities})")
+        raise ValueError(
+            f'{path}: header sizes disagree (vocabulary {len(vocab)} vs '
+            f'{cfg.vocab_size}, entities {len(entities)} vs {cfg.n_entities})'
+        )
     model = build_model(name_, cfg)
     try:
-        model.load_state_dict(blob["state_dict"])
+        model.load_state_dict(blob['state_dict'])
     except RuntimeError as exc:
         first = str(exc).splitlines()[0]
-        raise ValueError(f"{path}: weights do not fit model {name_!r}: {first}") from exc
+        raise ValueError(f'{path}: weights do not fit model {name_!r}: {first}') from exc
     model.eval()
     return Loaded(model, vocab, entities, header)

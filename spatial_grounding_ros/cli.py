@@ -1,26 +1,43 @@
-"""`spatial-grounding`: one command, with subcommands.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+`spatial-grounding`: one command, with subcommands.
 
 Bad input (missing or corrupt files, unknown names, mismatched checkpoints) prints one
 line `spatial-grounding: error: ...` and exits with status 2, without a traceback.
 """
+
 from __future__ import annotations
 
 import argparse
 import json
 import sys
 
-DEFAULT_DATA = "../shared/data"
+DEFAULT_DATA = '../shared/data'
 
 
 def cmd_train(args) -> int:
-    from .training import TrainConfig, train_supervised
+    from .training import train_supervised, TrainConfig
 
-    tc = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr, seed=args.seed,
-                     threads=args.threads, attention_warmup=args.attention_warmup,
-                     synthetic=args.synthetic, mirrors=args.mirrors, select=args.select,
-                     world_instructions=args.world_instructions, goal_weight=args.goal_weight)
+    tc = TrainConfig(
+        epochs=args.epochs,
+        batch_size=args.batch_size,
+        lr=args.lr,
+        seed=args.seed,
+        threads=args.threads,
+        attention_warmup=args.attention_warmup,
+        synthetic=args.synthetic,
+        mirrors=args.mirrors,
+        select=args.select,
+        world_instructions=args.world_instructions,
+        goal_weight=args.goal_weight,
+    )
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
-    print(json.dumps({"checkpoint": str(path), **summary}, indent=2))
+    print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
     return 0
 
 
@@ -32,17 +49,26 @@ def cmd_eval(args) -> int:
     loaded = load_checkpoint(args.checkpoint)
     data = load_task(args.task, args.split, args.data)
     if data.entities.names != loaded.entities.names:
-        raise ValueError(f"{args.checkpoint}: checkpoint was trained on the "
-                         f"{loaded.entities.domain} entity table, task {args.task} uses "
-                         f"{data.entities.domain}")
-    metrics = {"checkpoint": str(args.checkpoint), "model": loaded.name, "task": args.task,
-               "split": args.split, **evaluate(loaded.model, loaded.vocab, data)}
+        raise ValueError(
+            f'{args.checkpoint}: checkpoint was trained on the '
+            f'{loaded.entities.domain} entity table, task {args.task} uses '
+            f'{data.entities.domain}'
+        )
+    metrics = {
+        'checkpoint': str(args.checkpoint),
+        'model': loaded.name,
+        'task': args.task,
+        'split': args.split,
+        **evaluate(loaded.model, loaded.vocab, data),
+    }
     if args.json:
         print(json.dumps(metrics))
     else:
-        print(f"{loaded.name} on {args.task} {args.split} (n={metrics['n']}): "
-              f"MSE {metrics['mse']:.3f}  PQ {metrics['pq']:.3f}  MD {metrics['md']:.2f}  "
-              f"HIT {metrics['hit']:.3f}")
+        print(
+            f'{loaded.name} on {args.task} {args.split} (n={metrics["n"]}): '
+            f'MSE {metrics["mse"]:.3f}  PQ {metrics["pq"]:.3f}  MD {metrics["md"]:.2f}  '
+            f'HIT {metrics["hit"]:.3f}'
+        )
     return 0
 
 
@@ -55,8 +81,9 @@ def cmd_reproduce(args) -> int:
     if args.suite_only:
         reproduce_suite(args.out)
         return 0
-    reproduce_value_maps(args.data, args.out, args.epochs_scale, args.tasks, args.models,
-                         args.threads)
+    reproduce_value_maps(
+        args.data, args.out, args.epochs_scale, args.tasks, args.models, args.threads
+    )
     return 0
 
 
@@ -64,64 +91,98 @@ class _Parser(argparse.ArgumentParser):
     """Usage mistakes are one line and exit status 2, like every other bad input."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        self.exit(2, f'{self.prog}: error: {message}\n')
 
 
 def build_parser() -> argparse.ArgumentParser:
     from .datasets import SPLITS, TASKS
     from .models import MODELS
 
-    p = _Parser(prog="spatial-grounding", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
+    sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
 
-    t = sub.add_parser("train", help="supervised training on a task's train split")
-    t.add_argument("--task", required=True, choices=TASKS)
-    t.add_argument("--model", required=True, choices=list(MODELS))
-    t.add_argument("--data", default=DEFAULT_DATA)
-    t.add_argument("--out", default="out")
-    t.add_argument("--epochs", type=int, default=None)
-    t.add_argument("--batch-size", type=int, default=64)
-    t.add_argument("--attention-warmup", type=float, default=None,
-                   help="share of epochs t-RNetAttn trains with (still uniform) attention off "
-                        "(default: per task)")
-    t.add_argument("--lr", type=float, default=1e-3)
-    t.add_argument("--synthetic", type=int, default=None,
-                   help="generated PuddleWorld examples added to training, all families, "
-                        "mixed sizes (default: per task)")
-    t.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
-                   help="add mirrored copies of the training examples (default: per task)")
-    t.add_argument("--world-instructions", action=argparse.BooleanOptionalAction, default=None,
-                   help="add the training worlds' synthetic pickle instructions (default: per task)")
-    t.add_argument("--goal-weight", type=float, default=None,
-                   help="weight of the goal-cell cross-entropy beside the MSE (default: per task)")
-    t.add_argument("--select", choices=["pq", "mse"], default="pq",
-                   help="keep the epoch of the second half with the best validation PQ plus "
-                        "generated-validation HIT (ties: MSE), or the lowest MSE")
-    t.add_argument("--seed", type=int, default=0)
-    t.add_argument("--threads", type=int, default=2)
+    t = sub.add_parser('train', help="supervised training on a task's train split")
+    t.add_argument('--task', required=True, choices=TASKS)
+    t.add_argument('--model', required=True, choices=list(MODELS))
+    t.add_argument('--data', default=DEFAULT_DATA)
+    t.add_argument('--out', default='out')
+    t.add_argument('--epochs', type=int, default=None)
+    t.add_argument('--batch-size', type=int, default=64)
+    t.add_argument(
+        '--attention-warmup',
+        type=float,
+        default=None,
+        help='share of epochs t-RNetAttn trains with (still uniform) attention off '
+        '(default: per task)',
+    )
+    t.add_argument('--lr', type=float, default=1e-3)
+    t.add_argument(
+        '--synthetic',
+        type=int,
+        default=None,
+        help='generated PuddleWorld examples added to training, all families, '
+        'mixed sizes (default: per task)',
+    )
+    t.add_argument(
+        '--mirrors',
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help='add mirrored copies of the training examples (default: per task)',
+    )
+    t.add_argument(
+        '--world-instructions',
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="add the training worlds' synthetic pickle instructions (default: per task)",
+    )
+    t.add_argument(
+        '--goal-weight',
+        type=float,
+        default=None,
+        help='weight of the goal-cell cross-entropy beside the MSE (default: per task)',
+    )
+    t.add_argument(
+        '--select',
+        choices=['pq', 'mse'],
+        default='pq',
+        help='keep the epoch of the second half with the best validation PQ plus '
+        'generated-validation HIT (ties: MSE), or the lowest MSE',
+    )
+    t.add_argument('--seed', type=int, default=0)
+    t.add_argument('--threads', type=int, default=2)
     t.set_defaults(func=cmd_train)
 
-    e = sub.add_parser("eval", help="evaluate a checkpoint on a split")
-    e.add_argument("--checkpoint", required=True)
-    e.add_argument("--task", required=True, choices=TASKS)
-    e.add_argument("--split", default="test", choices=SPLITS)
-    e.add_argument("--data", default=DEFAULT_DATA)
-    e.add_argument("--json", action="store_true", help="print exactly one JSON object")
+    e = sub.add_parser('eval', help='evaluate a checkpoint on a split')
+    e.add_argument('--checkpoint', required=True)
+    e.add_argument('--task', required=True, choices=TASKS)
+    e.add_argument('--split', default='test', choices=SPLITS)
+    e.add_argument('--data', default=DEFAULT_DATA)
+    e.add_argument('--json', action='store_true', help='print exactly one JSON object')
     e.set_defaults(func=cmd_eval)
 
-    r = sub.add_parser("reproduce", help="train and evaluate the value-map table")
-    r.add_argument("--data", default=DEFAULT_DATA)
-    r.add_argument("--out", default="results")
-    r.add_argument("--tasks", nargs="+", default=["pw-local", "pw-global", "pw", "isi"])
-    r.add_argument("--models", nargs="+", default=list(MODELS))
-    r.add_argument("--epochs-scale", type=float, default=1.0,
-                   help="multiply every epoch budget (e.g. 0.1 for a quick check)")
-    r.add_argument("--threads", type=int, default=2, help="torch threads per training run")
-    r.add_argument("--suite-only", action="store_true",
-                   help="only run the reference suite on the shipped checkpoints (results/suite.*)")
-    r.add_argument("--ablation", action="store_true",
-                   help="only the clear-references ablation: t-RNet on pw, each change of the "
-                        "recipe off in turn (results/ablation.*, about 25 minutes)")
+    r = sub.add_parser('reproduce', help='train and evaluate the value-map table')
+    r.add_argument('--data', default=DEFAULT_DATA)
+    r.add_argument('--out', default='results')
+    r.add_argument('--tasks', nargs='+', default=['pw-local', 'pw-global', 'pw', 'isi'])
+    r.add_argument('--models', nargs='+', default=list(MODELS))
+    r.add_argument(
+        '--epochs-scale',
+        type=float,
+        default=1.0,
+        help='multiply every epoch budget (e.g. 0.1 for a quick check)',
+    )
+    r.add_argument('--threads', type=int, default=2, help='torch threads per training run')
+    r.add_argument(
+        '--suite-only',
+        action='store_true',
+        help='only run the reference suite on the shipped checkpoints (results/suite.*)',
+    )
+    r.add_argument(
+        '--ablation',
+        action='store_true',
+        help='only the clear-references ablation: t-RNet on pw, each change of the '
+        'recipe off in turn (results/ablation.*, about 25 minutes)',
+    )
     r.set_defaults(func=cmd_reproduce)
 
     for register in _extensions():
@@ -130,8 +191,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _extensions():
-    """Subcommands defined next to the code they drive: bench, RL, bags, and the closed-loop
-    demo, which needs rclpy (without it, every other subcommand still works)."""
+    """
+    Subcommands defined next to the code they drive.
+
+    bench, RL, bags, and the closed-loop demo, which needs rclpy (without it, every other
+    subcommand still works).
+    """
     from . import bags, bench, rl, suite
 
     found = [bench.register_cli, rl.register_cli, bags.register_cli, suite.register_cli]
@@ -148,11 +213,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except (ValueError, FileNotFoundError) as exc:
-        print(f"spatial-grounding: error: {exc}", file=sys.stderr)
+        print(f'spatial-grounding: error: {exc}', file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130
 
 
-if __name__ == "__main__":
+if __name__ == '__main__':
     sys.exit(main())

@@ -1,32 +1,77 @@
-"""Entity tables: what each integer in a grid means, per domain.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Entity tables: what each integer in a grid means, per domain.
 
 A grid cell holds an entity index; the model embeds that index. The ROS layer reads the
 same tables from `config/entities_*.yaml`, so a data-set map can be published as-is.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
 
 # PuddleWorld (Janner et al.): the indices of the data set's `map` arrays.
-PUDDLEWORLD_NAMES = ("grass", "puddle", "star", "circle", "triangle", "heart", "spade",
-                     "diamond", "rock", "tree", "house", "horse")
-PUDDLEWORLD_UNIQUE = ("star", "circle", "triangle", "heart", "spade", "diamond")
-PUDDLEWORLD_NONUNIQUE = ("rock", "tree", "house", "horse")
+PUDDLEWORLD_NAMES = (
+    'grass',
+    'puddle',
+    'star',
+    'circle',
+    'triangle',
+    'heart',
+    'spade',
+    'diamond',
+    'rock',
+    'tree',
+    'house',
+    'horse',
+)
+PUDDLEWORLD_UNIQUE = ('star', 'circle', 'triangle', 'heart', 'spade', 'diamond')
+PUDDLEWORLD_NONUNIQUE = ('rock', 'tree', 'house', 'horse')
 
 # ISI (Bisk et al.): blocks are identified by their list position and the board's
 # decoration; logo names in upstream order (GroundedLanguage's logo set).
-ISI_LOGOS = ("adidas", "bmw", "burger_king", "coca_cola", "esso", "heineken", "hp",
-             "mcdonalds", "mercedes_benz", "nvidia", "pepsi", "shell", "sri", "starbucks",
-             "stella_artois", "target", "texaco", "toyota", "twitter", "ups")
-ISI_NAMES = ("empty",) + tuple(f"logo_{n}" for n in ISI_LOGOS) + tuple(
-    f"digit_{i}" for i in range(1, 21))
+ISI_LOGOS = (
+    'adidas',
+    'bmw',
+    'burger_king',
+    'coca_cola',
+    'esso',
+    'heineken',
+    'hp',
+    'mcdonalds',
+    'mercedes_benz',
+    'nvidia',
+    'pepsi',
+    'shell',
+    'sri',
+    'starbucks',
+    'stella_artois',
+    'target',
+    'texaco',
+    'toyota',
+    'twitter',
+    'ups',
+)
+ISI_NAMES = (
+    ('empty',) + tuple(f'logo_{n}' for n in ISI_LOGOS) + tuple(f'digit_{i}' for i in range(1, 21))
+)
 
 
 @dataclass(frozen=True)
 class EntityTable:
-    """Names of the entity indices 0..n-1, which of them are obstacles (reward -1), and the
-    embedding size the paper uses for this domain."""
+    """
+    Entity names, obstacles and the paper's embedding size.
+
+    Names of the entity indices 0..n-1, which of them are obstacles (reward -1), and the
+    embedding size the paper uses for this domain.
+    """
+
     domain: str
     names: tuple[str, ...]
     obstacles: tuple[int, ...]
@@ -39,34 +84,44 @@ class EntityTable:
         return self.names.index(name)
 
     def to_dict(self) -> dict:
-        return {"domain": self.domain, "names": list(self.names),
-                "obstacles": list(self.obstacles), "embed_dim": self.embed_dim}
+        return {
+            'domain': self.domain,
+            'names': list(self.names),
+            'obstacles': list(self.obstacles),
+            'embed_dim': self.embed_dim,
+        }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "EntityTable":
+    def from_dict(cls, d: dict) -> 'EntityTable':
         try:
-            return cls(str(d["domain"]), tuple(str(n) for n in d["names"]),
-                       tuple(int(i) for i in d["obstacles"]), int(d["embed_dim"]))
+            return cls(
+                str(d['domain']),
+                tuple(str(n) for n in d['names']),
+                tuple(int(i) for i in d['obstacles']),
+                int(d['embed_dim']),
+            )
         except (KeyError, TypeError, ValueError) as exc:
-            raise ValueError(f"entity table is malformed ({exc!r}); it needs domain, names, "
-                             "obstacles and embed_dim") from exc
+            raise ValueError(
+                f'entity table is malformed ({exc!r}); it needs domain, names, '
+                'obstacles and embed_dim'
+            ) from exc
 
     @classmethod
-    def from_yaml(cls, path: str | Path) -> "EntityTable":
+    def from_yaml(cls, path: str | Path) -> 'EntityTable':
         import yaml
 
         path = Path(path)
         if not path.is_file():
-            raise FileNotFoundError(f"{path}: entity table file not found")
+            raise FileNotFoundError(f'{path}: entity table file not found')
         try:
             data = yaml.safe_load(path.read_text())
         except yaml.YAMLError as exc:
-            raise ValueError(f"{path}: not valid YAML ({exc})") from exc
+            raise ValueError(f'{path}: not valid YAML ({exc})') from exc
         if not isinstance(data, dict):
-            raise ValueError(f"{path}: an entity table must be a mapping")
+            raise ValueError(f'{path}: an entity table must be a mapping')
         return cls.from_dict(data)
 
 
-PUDDLEWORLD = EntityTable("puddleworld", PUDDLEWORLD_NAMES, (1,), 7)
-ISI = EntityTable("isi", ISI_NAMES, tuple(range(1, len(ISI_NAMES))), 13)
-TABLES = {"puddleworld": PUDDLEWORLD, "isi": ISI}
+PUDDLEWORLD = EntityTable('puddleworld', PUDDLEWORLD_NAMES, (1,), 7)
+ISI = EntityTable('isi', ISI_NAMES, tuple(range(1, len(ISI_NAMES))), 13)
+TABLES = {'puddleworld': PUDDLEWORLD, 'isi': ISI}

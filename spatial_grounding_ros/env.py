@@ -1,4 +1,11 @@
-"""The navigation environment of the paper's RL task, gymnasium-style without the dependency.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The navigation environment of the paper's RL task, gymnasium-style without the dependency.
 
 One episode = one example of a `GroundingSet` (a map, an instruction, and that example's
 reward and terminal maps): the agent starts on a random non-terminal cell, moves with
@@ -14,6 +21,7 @@ the example index so that training code can look up the map and the instruction.
 The gridworld ROS node wraps this class, so in-process and through-ROS runs see the same
 world.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,14 +36,15 @@ DEFAULT_STEP_LIMIT = 50
 class GridWorldEnv:
     """Episodes over the examples of `data`, in a random order (or a fixed `order`)."""
 
-    def __init__(self, data: GroundingSet, step_limit: int = DEFAULT_STEP_LIMIT,
-                 order: str = "random"):
+    def __init__(
+        self, data: GroundingSet, step_limit: int = DEFAULT_STEP_LIMIT, order: str = 'random'
+    ):
         if len(data) == 0:
-            raise ValueError("the environment needs at least one example")
+            raise ValueError('the environment needs at least one example')
         if step_limit < 1:
-            raise ValueError(f"step limit must be at least 1, not {step_limit}")
-        if order not in ("random", "sequential"):
-            raise ValueError(f"unknown episode order {order!r}; use random or sequential")
+            raise ValueError(f'step limit must be at least 1, not {step_limit}')
+        if order not in ('random', 'sequential'):
+            raise ValueError(f'unknown episode order {order!r}; use random or sequential')
         self.data, self.step_limit, self.order = data, step_limit, order
         self.rng = np.random.default_rng()
         self.example = -1
@@ -61,37 +70,50 @@ class GridWorldEnv:
         return tuple(int(x) for x in self.data.goals[self.example])
 
     def observation(self) -> dict:
-        return {"grid": self.grid, "instruction": self.instruction, "agent": self.agent}
+        return {'grid': self.grid, 'instruction': self.instruction, 'agent': self.agent}
 
     def info(self) -> dict:
-        return {"example": self.example, "steps": self.steps,
-                "total_reward": self.total_reward, "world": self.data.worlds[self.example]
-                if self.data.worlds else ""}
+        return {
+            'example': self.example,
+            'steps': self.steps,
+            'total_reward': self.total_reward,
+            'world': self.data.worlds[self.example] if self.data.worlds else '',
+        }
 
-    def reset(self, seed: int | None = None, example: int | None = None,
-              start: tuple[int, int] | None = None) -> tuple[dict, dict]:
-        """Start the next episode (or example `example`), on a random non-terminal cell
-        (or `start`)."""
+    def reset(
+        self,
+        seed: int | None = None,
+        example: int | None = None,
+        start: tuple[int, int] | None = None,
+    ) -> tuple[dict, dict]:
+        """
+        Start the next episode (or example `example`).
+
+        It starts on a random non-terminal cell (or `start`).
+        """
         if seed is not None:
             self.rng = np.random.default_rng(seed)
         if example is None:
-            example = (int(self.rng.integers(len(self.data))) if self.order == "random"
-                       else (self.example + 1) % len(self.data))
+            example = (
+                int(self.rng.integers(len(self.data)))
+                if self.order == 'random'
+                else (self.example + 1) % len(self.data)
+            )
         if not 0 <= example < len(self.data):
-            raise ValueError(f"example {example} is out of range 0..{len(self.data) - 1}")
+            raise ValueError(f'example {example} is out of range 0..{len(self.data) - 1}')
         self.example = int(example)
         if start is None:
             free = np.flatnonzero(~self.data.terminal[self.example].reshape(-1))
             start = np.unravel_index(int(self.rng.choice(free)), self.shape)
         start = (int(start[0]), int(start[1]))
         if not (0 <= start[0] < self.shape[0] and 0 <= start[1] < self.shape[1]):
-            raise ValueError(f"start cell {start} is outside the {self.shape} map")
+            raise ValueError(f'start cell {start} is outside the {self.shape} map')
         self.agent, self.steps, self.total_reward, self.done = start, 0, 0.0, False
         return self.observation(), self.info()
 
     def step(self, action: int) -> tuple[dict, float, bool, bool, dict]:
         if self.done:
-            raise RuntimeError("the episode is over: call reset() first")
+            raise RuntimeError('the episode is over: call reset() first')
         self.agent = world.step_cell(self.agent, int(action), self.shape)
         reward = float(self.data.rewards[self.example][self.agent])
         terminated = bool(self.data.terminal[self.example][self.agent])
@@ -102,11 +124,20 @@ class GridWorldEnv:
         return self.observation(), reward, terminated, truncated, self.info()
 
 
-def load_episodes(source: str, split: str = "train", data_dir: str = "../shared/data",
-                  n: int = 100, seed: int = 0) -> GroundingSet:
-    """Episodes from a task split (`pw-local`, `pw-global`, `pw`, `isi`) or from the
-    generator (`generator`, `generator-local`, `generator-global`; `generator` = mixed)."""
-    if source.startswith("generator"):
-        mode = source.partition("-")[2] or "mixed"
+def load_episodes(
+    source: str,
+    split: str = 'train',
+    data_dir: str = '../shared/data',
+    n: int = 100,
+    seed: int = 0,
+) -> GroundingSet:
+    """
+    Load episodes from a task split or from the generator.
+
+    Episodes from a task split (`pw-local`, `pw-global`, `pw`, `isi`) or from the
+    generator (`generator`, `generator-local`, `generator-global`; `generator` = mixed).
+    """
+    if source.startswith('generator'):
+        mode = source.partition('-')[2] or 'mixed'
         return generate(n, seed=seed, mode=mode)
     return load_task(source, split, data_dir)

@@ -1,4 +1,13 @@
-"""A plain Python API over a trained model, for users who do not want topics:
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+A plain Python API over a trained model.
+
+A plain Python API over a trained model, for users who do not want topics:
 
     g = Grounder.from_checkpoint()                    # the packaged pw_t-rnet-attn
     result = g.ground(grid, "reach cell two below the westernmost rock")
@@ -6,6 +15,7 @@
 
 The ROS grounder node is a thin adapter over this class.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -13,19 +23,20 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .checkpoints import Loaded, load_checkpoint
-from .text import UNK, tokenize
+from .checkpoints import load_checkpoint, Loaded
+from .text import tokenize, UNK
 
-DEFAULT_CHECKPOINT = "pw_t-rnet-attn"
+DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 
 
 @dataclass
 class Grounding:
     """One grounded instruction. Maps are (H, W) with row 0 = north."""
+
     instruction: str
-    values: np.ndarray          # predicted value map
-    relation_map: np.ndarray    # Z1 (the paper's interpretability view is |Z1|)
-    goal: tuple[int, int]       # (row, col) of the best cell
+    values: np.ndarray  # predicted value map
+    relation_map: np.ndarray  # Z1 (the paper's interpretability view is |Z1|)
+    goal: tuple[int, int]  # (row, col) of the best cell
     words: list[str]
     attention: list[float] | None  # per word, averaged over cell pairs (t-RNetAttn only)
     unknown_words: list[str]
@@ -38,7 +49,7 @@ class Grounder:
         self.model.eval()
 
     @classmethod
-    def from_checkpoint(cls, checkpoint: str = DEFAULT_CHECKPOINT) -> "Grounder":
+    def from_checkpoint(cls, checkpoint: str = DEFAULT_CHECKPOINT) -> 'Grounder':
         return cls(load_checkpoint(checkpoint))
 
     def check(self, grid: np.ndarray, instruction: str) -> None:
@@ -47,21 +58,23 @@ class Grounder:
         self.check_instruction(instruction)
 
     def check_grid(self, grid: np.ndarray) -> None:
-        """The grid half of check(): the ROS node checks a map when it arrives."""
+        """Run the grid half of check(): the ROS node checks a map when it arrives."""
         grid = np.asarray(grid)
         if grid.ndim != 2 or 0 in grid.shape:
-            raise ValueError(f"grid must be a non-empty 2-D array, got shape {grid.shape}")
+            raise ValueError(f'grid must be a non-empty 2-D array, got shape {grid.shape}')
         bad = np.unique(grid[(grid < 0) | (grid >= len(self.entities))])
         if bad.size:
-            raise ValueError(f"grid holds entity values {bad.tolist()[:10]} outside the "
-                             f"{self.entities.domain} table (0..{len(self.entities) - 1})")
+            raise ValueError(
+                f'grid holds entity values {bad.tolist()[:10]} outside the '
+                f'{self.entities.domain} table (0..{len(self.entities) - 1})'
+            )
 
     def check_instruction(self, instruction: str) -> None:
-        """The instruction half of check(): the node checks one before any map arrives."""
+        """Run the instruction half of check(): the node checks one before any map arrives."""
         if not tokenize(instruction):
-            raise ValueError("instruction has no words")
+            raise ValueError('instruction has no words')
         if all(i == UNK for i in self.vocab.encode(instruction)):
-            raise ValueError(f"no word of the instruction {instruction!r} is in the vocabulary")
+            raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
     def ground(self, grid: np.ndarray, instruction: str) -> Grounding:
@@ -72,7 +85,13 @@ class Grounder:
         values = values[0].numpy()
         row, col = np.unravel_index(int(values.argmax()), values.shape)
         words = tokenize(instruction)
-        attention = aux["attention"]
-        return Grounding(instruction, values, aux["relation_map"][0].numpy(), (int(row), int(col)),
-                         words, None if attention is None else attention[0].tolist(),
-                         [w for w in words if w not in self.vocab.index])
+        attention = aux['attention']
+        return Grounding(
+            instruction,
+            values,
+            aux['relation_map'][0].numpy(),
+            (int(row), int(col)),
+            words,
+            None if attention is None else attention[0].tolist(),
+            [w for w in words if w not in self.vocab.index],
+        )

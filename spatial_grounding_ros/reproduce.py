@@ -1,36 +1,56 @@
-"""`make reproduce`: train every model on every task, evaluate on the test splits, write
-`results/value_map.json` and `results/value_map.md` (the README table), ship the
-t-RNetAttn and t-CNN checkpoints in the package, and run the reference suite on the shipped
-PuddleWorld checkpoints (`results/suite.json`, `results/suite.md`)."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+`make reproduce`.
+
+Train every model on every task, evaluate on the test splits, write `results/value_map.json` and
+`results/value_map.md` (the README table), ship the t-RNetAttn and t-CNN checkpoints in the
+package, and run the reference suite on the shipped PuddleWorld checkpoints (`results/suite.json`,
+`results/suite.md`).
+"""
+
 from __future__ import annotations
 
 import fcntl
 import json
+from pathlib import Path
 import platform
 import shutil
 import time
-from pathlib import Path
 
 import numpy as np
 import torch
 
-from .checkpoints import PACKAGED_DIR, load_checkpoint
+from .checkpoints import load_checkpoint, PACKAGED_DIR
 from .datasets import load_task
-from .training import EPOCHS, TrainConfig, evaluate, train_supervised
+from .training import EPOCHS, evaluate, train_supervised, TrainConfig
 
 # Table 1 of the paper (value maps, test split): (MSE, PQ, MD); ISI has no PQ there.
 PAPER = {
-    ("pw-local", "t-cnn"): (0.25, 0.94, 2.34), ("pw-local", "t-uvfa"): (3.23, 0.57, 4.97),
-    ("pw-local", "t-rnet-attn"): (0.22, 0.94, 1.95),
-    ("pw-global", "t-cnn"): (0.41, 0.89, 3.81), ("pw-global", "t-uvfa"): (1.90, 0.62, 5.31),
-    ("pw-global", "t-rnet-attn"): (0.40, 0.91, 3.82),
-    ("isi", "t-cnn"): (0.15, None, 3.14), ("isi", "t-uvfa"): (None, None, 4.61),
-    ("isi", "t-rnet-attn"): (0.15, None, 3.43),
+    ('pw-local', 't-cnn'): (0.25, 0.94, 2.34),
+    ('pw-local', 't-uvfa'): (3.23, 0.57, 4.97),
+    ('pw-local', 't-rnet-attn'): (0.22, 0.94, 1.95),
+    ('pw-global', 't-cnn'): (0.41, 0.89, 3.81),
+    ('pw-global', 't-uvfa'): (1.90, 0.62, 5.31),
+    ('pw-global', 't-rnet-attn'): (0.40, 0.91, 3.82),
+    ('isi', 't-cnn'): (0.15, None, 3.14),
+    ('isi', 't-uvfa'): (None, None, 4.61),
+    ('isi', 't-rnet-attn'): (0.15, None, 3.43),
 }
-SHIPPED = ("t-rnet-attn", "t-cnn")
+SHIPPED = ('t-rnet-attn', 't-cnn')
 # The suite table's columns: the node's default first, then the per-task checkpoints.
-SUITE_CHECKPOINTS = ("pw_t-rnet-attn", "pw_t-cnn", "pw-local_t-rnet-attn", "pw-local_t-cnn",
-                     "pw-global_t-rnet-attn", "pw-global_t-cnn")
+SUITE_CHECKPOINTS = (
+    'pw_t-rnet-attn',
+    'pw_t-cnn',
+    'pw-local_t-rnet-attn',
+    'pw-local_t-cnn',
+    'pw-global_t-rnet-attn',
+    'pw-global_t-cnn',
+)
 
 
 def forward_latency(model, grids, tokens, repeats: int = 50) -> float:
@@ -46,124 +66,185 @@ def forward_latency(model, grids, tokens, repeats: int = 50) -> float:
 
 
 def _fmt(x, digits=2):
-    return "-" if x is None else f"{x:.{digits}f}"
+    return '-' if x is None else f'{x:.{digits}f}'
 
 
 def markdown_table(rows: list[dict]) -> str:
-    lines = ["| task | model | MSE | PQ | MD | HIT | paper MSE / PQ / MD | train min |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    lines = [
+        '| task | model | MSE | PQ | MD | HIT | paper MSE / PQ / MD | train min |',
+        '| --- | --- | --- | --- | --- | --- | --- | --- |',
+    ]
     for r in rows:
-        paper = PAPER.get((r["task"], r["model"]))
-        paper_s = " / ".join(_fmt(x) for x in paper) if paper else "-"
-        lines.append(f"| {r['task']} | {r['model']} | {r['test']['mse']:.3f} | {r['test']['pq']:.3f} "
-                     f"| {r['test']['md']:.2f} | {_fmt(r['test'].get('hit'), 3)} | {paper_s} "
-                     f"| {r['train_seconds'] / 60:.1f} |")
-    return "\n".join(lines) + "\n"
+        paper = PAPER.get((r['task'], r['model']))
+        paper_s = ' / '.join(_fmt(x) for x in paper) if paper else '-'
+        lines.append(
+            f'| {r["task"]} | {r["model"]} | {r["test"]["mse"]:.3f} | {r["test"]["pq"]:.3f} '
+            f'| {r["test"]["md"]:.2f} | {_fmt(r["test"].get("hit"), 3)} | {paper_s} '
+            f'| {r["train_seconds"] / 60:.1f} |'
+        )
+    return '\n'.join(lines) + '\n'
 
 
-def reproduce_value_maps(data_dir: str, out: str, epochs_scale: float = 1.0,
-                         tasks=("pw-local", "pw-global", "pw", "isi"),
-                         models=("t-rnet-attn", "t-rnet", "t-cnn", "t-uvfa"),
-                         threads: int = 2) -> list[dict]:
+def reproduce_value_maps(
+    data_dir: str,
+    out: str,
+    epochs_scale: float = 1.0,
+    tasks=('pw-local', 'pw-global', 'pw', 'isi'),
+    models=('t-rnet-attn', 't-rnet', 't-cnn', 't-uvfa'),
+    threads: int = 2,
+) -> list[dict]:
     out = Path(out)
-    ckpt_dir = out / "checkpoints"
-    results_path = out / "value_map.json"
+    ckpt_dir = out / 'checkpoints'
+    results_path = out / 'value_map.json'
     rows = []
     for task in tasks:
-        test = load_task(task, "test", data_dir)
+        test = load_task(task, 'test', data_dir)
         for model_name in models:
             tc = TrainConfig(epochs=max(1, int(EPOCHS[task] * epochs_scale)), threads=threads)
             path, summary = train_supervised(task, model_name, data_dir, ckpt_dir, tc)
             loaded = load_checkpoint(path)
-            row = {"task": task, "model": model_name, **summary,
-                   "test": evaluate(loaded.model, loaded.vocab, test), "checkpoint": path.name}
+            row = {
+                'task': task,
+                'model': model_name,
+                **summary,
+                'test': evaluate(loaded.model, loaded.vocab, test),
+                'checkpoint': path.name,
+            }
             g1 = torch.from_numpy(test.grids[:1])
             tokens = torch.from_numpy(loaded.vocab.encode_batch(test.instructions[:512]))
-            row["forward_seconds_one_map"] = forward_latency(loaded.model, g1, tokens[:1])
-            row["forward_seconds_batch_512"] = forward_latency(
-                loaded.model, torch.from_numpy(test.grids[:512]), tokens, repeats=5)
+            row['forward_seconds_one_map'] = forward_latency(loaded.model, g1, tokens[:1])
+            row['forward_seconds_batch_512'] = forward_latency(
+                loaded.model, torch.from_numpy(test.grids[:512]), tokens, repeats=5
+            )
             if model_name in SHIPPED:
                 PACKAGED_DIR.mkdir(exist_ok=True)
                 shutil.copy(path, PACKAGED_DIR / path.name)
-            print(f"{task} {model_name}: test {row['test']}", flush=True)
+            print(f'{task} {model_name}: test {row["test"]}', flush=True)
             merge_results(results_path, row)
             rows.append(row)
-    if any(task.startswith("pw") for task in tasks):
+    if any(task.startswith('pw') for task in tasks):
         reproduce_suite(out)
     return rows
 
 
 def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int = 0) -> dict:
-    """The reference suite on every shipped PuddleWorld checkpoint: results/suite.{json,md}."""
+    """Run the reference suite on every shipped PuddleWorld checkpoint: results/suite.{json,md}."""
     from . import suite
 
-    results = {name: suite.run_suite(name, sizes, n, seed, progress=True) for name in SUITE_CHECKPOINTS}
+    results = {
+        name: suite.run_suite(name, sizes, n, seed, progress=True) for name in SUITE_CHECKPOINTS
+    }
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    meta = {"command": "make reproduce-suite", "sizes": list(sizes), "n_per_family": n, "seed": seed}
-    (out / "suite.json").write_text(json.dumps({"meta": meta, "runs": results}, indent=1) + "\n")
-    (out / "suite.md").write_text(suite.markdown_table(results))
+    meta = {
+        'command': 'make reproduce-suite',
+        'sizes': list(sizes),
+        'n_per_family': n,
+        'seed': seed,
+    }
+    (out / 'suite.json').write_text(json.dumps({'meta': meta, 'runs': results}, indent=1) + '\n')
+    (out / 'suite.md').write_text(suite.markdown_table(results))
     return results
 
 
 def merge_results(results_path: Path, row: dict) -> None:
-    """Add or replace one (task, model) row; runs of several processes (one per task) may
-    share the file, so the read-modify-write happens under a lock."""
+    """
+    Add or replace one (task, model) row.
+
+    Runs of several processes (one per task) may share the file, so the read-modify-write happens
+    under a lock.
+    """
     results_path.parent.mkdir(parents=True, exist_ok=True)
-    with open(results_path.with_suffix(".lock"), "w") as lock:
+    with open(results_path.with_suffix('.lock'), 'w') as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        runs = json.loads(results_path.read_text())["runs"] if results_path.is_file() else []
-        runs = {(r["task"], r["model"]): r for r in runs}
-        runs[(row["task"], row["model"])] = row
-        order = {t: i for i, t in enumerate(("pw-local", "pw-global", "pw", "isi"))}
-        rows = sorted(runs.values(), key=lambda r: (order.get(r["task"], 9), r["model"]))
-        meta = {"command": "make reproduce", "machine": platform.processor() or platform.machine(),
-                "torch": torch.__version__}
-        results_path.write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
-        results_path.with_suffix(".md").write_text(markdown_table(rows))
+        runs = json.loads(results_path.read_text())['runs'] if results_path.is_file() else []
+        runs = {(r['task'], r['model']): r for r in runs}
+        runs[(row['task'], row['model'])] = row
+        order = {t: i for i, t in enumerate(('pw-local', 'pw-global', 'pw', 'isi'))}
+        rows = sorted(runs.values(), key=lambda r: (order.get(r['task'], 9), r['model']))
+        meta = {
+            'command': 'make reproduce',
+            'machine': platform.processor() or platform.machine(),
+            'torch': torch.__version__,
+        }
+        results_path.write_text(json.dumps({'meta': meta, 'runs': rows}, indent=1) + '\n')
+        results_path.with_suffix('.md').write_text(markdown_table(rows))
 
 
 # Each change of the clear-references recipe, turned off one at a time from the full recipe
 # (same seed, same epochs): (name, TrainConfig overrides, ModelConfig overrides).
 ABLATIONS = (
-    ("recipe", {}, {}),
-    ("MSE only (no goal cross-entropy)", {"goal_weight": 0.0}, {}),
-    ("fixed goal temperature 5", {"learn_goal_scale": False}, {}),
-    ("gradient maps span -1..1", {}, {"gradient_cells": 0.0}),
-    ("no world-pickle instructions", {"world_instructions": False}, {}),
-    ("no generated worlds", {"synthetic": 0}, {}),
+    ('recipe', {}, {}),
+    ('MSE only (no goal cross-entropy)', {'goal_weight': 0.0}, {}),
+    ('fixed goal temperature 5', {'learn_goal_scale': False}, {}),
+    ('gradient maps span -1..1', {}, {'gradient_cells': 0.0}),
+    ('no world-pickle instructions', {'world_instructions': False}, {}),
+    ('no generated worlds', {'synthetic': 0}, {}),
 )
 
 
-def reproduce_ablation(data_dir: str, out: str, model: str = "t-rnet", epochs: int = 8,
-                       synthetic: int = 16000, threads: int = 2, seed: int = 0) -> list[dict]:
-    """Train `model` on pw once per ABLATIONS row and score each on the suite (10x10 and
-    32x32) and the human test splits: results/ablation.json and results/ablation.md."""
+def reproduce_ablation(
+    data_dir: str,
+    out: str,
+    model: str = 't-rnet',
+    epochs: int = 8,
+    synthetic: int = 16000,
+    threads: int = 2,
+    seed: int = 0,
+) -> list[dict]:
+    """
+    Train `model` on pw once per ABLATIONS row and score each run.
+
+    Train `model` on pw once per ABLATIONS row and score each on the suite (10x10 and
+    32x32) and the human test splits: results/ablation.json and results/ablation.md.
+    """
     from . import suite
 
     rows = []
     for name, train_overrides, model_overrides in ABLATIONS:
-        tc = TrainConfig(**{"epochs": epochs, "synthetic": synthetic, "threads": threads, "seed": seed,
-                            **train_overrides})
-        path, summary = train_supervised("pw", model, data_dir, Path(out) / "ablation" / name.split()[0],
-                                         tc, **model_overrides)
+        tc = TrainConfig(
+            **{
+                'epochs': epochs,
+                'synthetic': synthetic,
+                'threads': threads,
+                'seed': seed,
+                **train_overrides,
+            }
+        )
+        path, summary = train_supervised(
+            'pw', model, data_dir, Path(out) / 'ablation' / name.split()[0], tc, **model_overrides
+        )
         loaded = load_checkpoint(path)
-        row = {"variant": name, "train_seconds": summary["train_seconds"],
-               "suite": suite.run_suite(path, (10, 32), 40, seed, progress=False)}
-        for task in ("pw-local", "pw-global"):
-            row[task] = evaluate(loaded.model, loaded.vocab, load_task(task, "test", data_dir))
-        print(f"{name}: suite {row['suite']['sizes']}, local {row['pw-local']}", flush=True)
+        row = {
+            'variant': name,
+            'train_seconds': summary['train_seconds'],
+            'suite': suite.run_suite(path, (10, 32), 40, seed, progress=False),
+        }
+        for task in ('pw-local', 'pw-global'):
+            row[task] = evaluate(loaded.model, loaded.vocab, load_task(task, 'test', data_dir))
+        print(f'{name}: suite {row["suite"]["sizes"]}, local {row["pw-local"]}', flush=True)
         rows.append(row)
-    meta = {"command": f"spatial-grounding reproduce --ablation (pw, {model}, {epochs} epochs, "
-                       f"{synthetic} generated, seed {seed})"}
+    meta = {
+        'command': f'spatial-grounding reproduce --ablation (pw, {model}, {epochs} epochs, '
+        f'{synthetic} generated, seed {seed})'
+    }
     Path(out).mkdir(parents=True, exist_ok=True)
-    (Path(out) / "ablation.json").write_text(json.dumps({"meta": meta, "runs": rows}, indent=1) + "\n")
-    lines = ["| variant | suite hit 10x10 | suite hit 32x32 | PW local MD / HIT / MSE / PQ "
-             "| PW global MD / HIT / MSE / PQ |", "| --- | --- | --- | --- | --- |"]
+    (Path(out) / 'ablation.json').write_text(
+        json.dumps({'meta': meta, 'runs': rows}, indent=1) + '\n'
+    )
+    lines = [
+        '| variant | suite hit 10x10 | suite hit 32x32 | PW local MD / HIT / MSE / PQ '
+        '| PW global MD / HIT / MSE / PQ |',
+        '| --- | --- | --- | --- | --- |',
+    ]
     for r in rows:
-        human = [f"{r[t]['md']:.2f} / {r[t]['hit']:.3f} / {r[t]['mse']:.3f} / {r[t]['pq']:.3f}"
-                 for t in ("pw-local", "pw-global")]
-        lines.append(f"| {r['variant']} | {r['suite']['sizes']['10']['hit']:.1%} "
-                     f"| {r['suite']['sizes']['32']['hit']:.1%} | {human[0]} | {human[1]} |")
-    (Path(out) / "ablation.md").write_text("\n".join(lines) + "\n")
+        human = [
+            f'{r[t]["md"]:.2f} / {r[t]["hit"]:.3f} / {r[t]["mse"]:.3f} / {r[t]["pq"]:.3f}'
+            for t in ('pw-local', 'pw-global')
+        ]
+        lines.append(
+            f'| {r["variant"]} | {r["suite"]["sizes"]["10"]["hit"]:.1%} '
+            f'| {r["suite"]["sizes"]["32"]["hit"]:.1%} | {human[0]} | {human[1]} |'
+        )
+    (Path(out) / 'ablation.md').write_text('\n'.join(lines) + '\n')
     return rows

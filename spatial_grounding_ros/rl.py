@@ -1,5 +1,14 @@
-"""Goal navigation with RL (paper section 3.3): explore with the predicted value map, then
-fitted value iteration against a periodically synced target network. Read top to bottom.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Goal navigation with RL (paper section 3.3).
+
+Explore with the predicted value map, then fitted value iteration against a periodically synced
+target network. Read top to bottom.
 
 The agent never sees a true value map. It sees what an environment shows (the map, the
 instruction, its cell) and the reward of each cell it enters. Value convention (world.py):
@@ -14,68 +23,77 @@ The "max over next cells" uses the known deterministic move model (world.next_ce
 4 moves, off the map stays put), as in the paper's loss. Only cells the agent entered are
 regressed. The regression is prioritized (RLConfig.priority): each visited cell's squared
 error is weighted by (|error| + 0.1)^priority, so the few goal cells found, whose targets
-stand out, are not drowned by the many wandering cells (plain mean square: priority 0). PQ and MD are then measured on the predicted maps of the test split
+stand out, are not drowned by the many wandering cells (plain mean square: priority 0). PQ
+and MD are then measured on the predicted maps of the test split
 (world.evaluate_maps), the true maps being used for that evaluation only.
 
 `--via-ros` runs the very same loop, but the episodes come from the gridworld node's topics
 (ros/gridworld_client.py) instead of an in-process GridWorldEnv.
 """
+
 from __future__ import annotations
 
 import argparse
 import copy
+from dataclasses import asdict, dataclass
 import functools
 import json
-import time
-from dataclasses import asdict, dataclass
 from pathlib import Path
+import time
 
 import numpy as np
 import torch
 
 from . import world
-from .augment import MIRROR_IMAGES, mirror_cell, mirror_instruction
+from .augment import mirror_cell, MIRROR_IMAGES, mirror_instruction
 from .checkpoints import save_checkpoint
-from .datasets import TASKS, GroundingSet
+from .datasets import GroundingSet, TASKS
 from .env import GridWorldEnv, load_episodes
-from .models import MODELS, ModelConfig, build_model
+from .models import build_model, ModelConfig, MODELS
 from .text import Vocabulary
-from .training import TASK_SETTINGS, predict
+from .training import predict, TASK_SETTINGS
 
-RL_TASKS = ("pw-local", "pw-global", "isi")
+RL_TASKS = ('pw-local', 'pw-global', 'isi')
 
 
 @dataclass
 class RLConfig:
     """All RL hyper-parameters in one place."""
-    episodes: int = 20_000          # episodes of experience in total
-    envs: int = 128                 # episodes run side by side per round (one forward pass)
-    step_limit: int | None = None   # None: 5 * the map's longer side
+
+    episodes: int = 20_000  # episodes of experience in total
+    envs: int = 128  # episodes run side by side per round (one forward pass)
+    step_limit: int | None = None  # None: 5 * the map's longer side
     gamma: float = world.GAMMA
     lr: float = 1e-3
-    batch_maps: int = 64            # maps per regression step (all their visited cells)
-    updates_per_round: int = 48     # regression steps after each round of episodes
-    target_sync: int = 100          # regression steps between target-network syncs
-    priority: float = 1.0           # weight cells by (|error| + 0.1)^priority (0: plain mean)
-    double: bool = False            # double FVI: online map picks the next cell, target values it
-    eps_start: float = 1.0          # epsilon-greedy exploration, decayed linearly ...
+    batch_maps: int = 64  # maps per regression step (all their visited cells)
+    updates_per_round: int = 48  # regression steps after each round of episodes
+    target_sync: int = 100  # regression steps between target-network syncs
+    priority: float = 1.0  # weight cells by (|error| + 0.1)^priority (0: plain mean)
+    double: bool = False  # double FVI: online map picks the next cell, target values it
+    eps_start: float = 1.0  # epsilon-greedy exploration, decayed linearly ...
     eps_end: float = 0.1
-    eps_fraction: float = 0.5       # ... over this fraction of the episodes
-    attention_warmup: float = 0.85  # share of episodes t-RNetAttn runs with (still uniform) attention off
-    mirrors: bool | None = None     # also learn from the mirror images of each map; None: the task's (training.TASK_SETTINGS)
+    eps_fraction: float = 0.5  # ... over this fraction of the episodes
+    # share of episodes t-RNetAttn runs with (still uniform) attention off
+    attention_warmup: float = 0.85
+    # also learn from the mirror images of each map; None: the task's (training.TASK_SETTINGS)
+    mirrors: bool | None = None
     seed: int = 0
     threads: int = 1
 
 
 class ReplayBuffer:
-    """Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
+    """
+    Transitions (map, instruction, s, a, r, s', done).
+
+    Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
     per distinct pair. Because moves are deterministic, the cells entered in a map, with
     their observed reward and terminal flag, are all a regression step needs: `visited`,
     `reward`, `terminal` (per map, (H, W)) are kept up to date from the transitions.
 
     With `mirrors`, each map also gets its three mirror images (direction words swapped),
     and every observed cell is recorded in them too: the flipped grid MDP has the flipped
-    rewards, so the agent's own experience is reused four times without another step."""
+    rewards, so the agent's own experience is reused four times without another step.
+    """
 
     def __init__(self, shape: tuple[int, int], mirrors: bool = False):
         self.shape = shape
@@ -92,8 +110,11 @@ class ReplayBuffer:
     def _new_map(self, grid: np.ndarray, instruction: str) -> int:
         self.grids.append(np.ascontiguousarray(grid, np.int64))
         self.instructions.append(instruction)
-        for table, dtype in ((self.visited, bool), (self.reward, np.float32),
-                             (self.terminal, bool)):
+        for table, dtype in (
+            (self.visited, bool),
+            (self.reward, np.float32),
+            (self.terminal, bool),
+        ):
             table.append(np.zeros(self.shape, dtype))
         return len(self.grids) - 1
 
@@ -101,14 +122,24 @@ class ReplayBuffer:
         key = (np.asarray(grid, np.int64).tobytes(), instruction)
         if key not in self.key_to_id:
             i = self.key_to_id[key] = self._new_map(grid, instruction)
-            self.images[i] = [] if not self.mirrors else [
-                (self._new_map(np.flip(grid, axis=axes), mirror_instruction(instruction, axes)), axes)
-                for axes in MIRROR_IMAGES]
+            self.images[i] = (
+                []
+                if not self.mirrors
+                else [
+                    (
+                        self._new_map(
+                            np.flip(grid, axis=axes), mirror_instruction(instruction, axes)
+                        ),
+                        axes,
+                    )
+                    for axes in MIRROR_IMAGES
+                ]
+            )
         return self.key_to_id[key]
 
     @property
     def n_observed(self) -> int:
-        """Maps the agent has played (not counting mirror images)."""
+        """Count the maps the agent has played (not counting mirror images)."""
         return len(self.key_to_id)
 
     def add(self, map_id: int, s: tuple, a: int, r: float, s2: tuple, done: bool) -> None:
@@ -130,7 +161,9 @@ def next_cells(height: int, width: int) -> np.ndarray:
     return world.next_cell_indices(height, width)
 
 
-def act(values: np.ndarray, cell: tuple[int, int], epsilon: float, rng: np.random.Generator) -> int:
+def act(
+    values: np.ndarray, cell: tuple[int, int], epsilon: float, rng: np.random.Generator
+) -> int:
     """Epsilon-greedy over the greedy policy of a predicted value map."""
     if rng.random() < epsilon:
         return int(rng.integers(len(world.ACTIONS)))
@@ -139,29 +172,42 @@ def act(values: np.ndarray, cell: tuple[int, int], epsilon: float, rng: np.rando
 
 
 @torch.no_grad()
-def predicted_maps(model, vocab: Vocabulary, grids: list[np.ndarray], instructions: list[str]) -> np.ndarray:
+def predicted_maps(
+    model, vocab: Vocabulary, grids: list[np.ndarray], instructions: list[str]
+) -> np.ndarray:
     model.eval()
-    out = model(torch.as_tensor(np.stack(grids)), torch.as_tensor(vocab.encode_batch(instructions)))
+    out = model(
+        torch.as_tensor(np.stack(grids)), torch.as_tensor(vocab.encode_batch(instructions))
+    )
     model.train()
     return out.numpy()
 
 
-def run_episodes(envs: list, model, vocab: Vocabulary, buffer: ReplayBuffer, epsilon: float,
-                 rng: np.random.Generator) -> list[float]:
-    """One episode per environment, side by side, acting on one predicted map per episode.
-    Returns each episode's total reward."""
+def run_episodes(
+    envs: list,
+    model,
+    vocab: Vocabulary,
+    buffer: ReplayBuffer,
+    epsilon: float,
+    rng: np.random.Generator,
+) -> list[float]:
+    """
+    One episode per environment, side by side, acting on one predicted map per episode.
+
+    Returns each episode's total reward.
+    """
     obs = [env.reset()[0] for env in envs]
-    ids = [buffer.map_id(o["grid"], o["instruction"]) for o in obs]
-    maps = predicted_maps(model, vocab, [o["grid"] for o in obs], [o["instruction"] for o in obs])
+    ids = [buffer.map_id(o['grid'], o['instruction']) for o in obs]
+    maps = predicted_maps(model, vocab, [o['grid'] for o in obs], [o['instruction'] for o in obs])
     returns = [0.0] * len(envs)
     active = list(range(len(envs)))
     while active:
         still = []
         for i in active:
-            s = obs[i]["agent"]
+            s = obs[i]['agent']
             a = act(maps[i], s, epsilon, rng)
             obs[i], r, terminated, truncated, _ = envs[i].step(a)
-            buffer.add(ids[i], s, a, r, obs[i]["agent"], terminated)
+            buffer.add(ids[i], s, a, r, obs[i]['agent'], terminated)
             returns[i] += r
             if not (terminated or truncated):
                 still.append(i)
@@ -169,17 +215,32 @@ def run_episodes(envs: list, model, vocab: Vocabulary, buffer: ReplayBuffer, eps
     return returns
 
 
-def fitted_value_step(model, target_maps: dict, target_model, vocab: Vocabulary,
-                      buffer: ReplayBuffer, opt, cfg: RLConfig, rng: np.random.Generator) -> float:
+def fitted_value_step(
+    model,
+    target_maps: dict,
+    target_model,
+    vocab: Vocabulary,
+    buffer: ReplayBuffer,
+    opt,
+    cfg: RLConfig,
+    rng: np.random.Generator,
+) -> float:
     """One regression step on the visited cells of a batch of maps."""
     ids = buffer.sample_maps(rng, cfg.batch_maps)
     missing = [i for i in ids if i not in target_maps]
     if missing:  # the target network is fixed between syncs: compute each map once
-        for i, v in zip(missing, predicted_maps(target_model, vocab, [buffer.grids[i] for i in missing],
-                                                [buffer.instructions[i] for i in missing])):
+        for i, v in zip(
+            missing,
+            predicted_maps(
+                target_model,
+                vocab,
+                [buffer.grids[i] for i in missing],
+                [buffer.instructions[i] for i in missing],
+            ),
+        ):
             target_maps[i] = v
     h, w = buffer.shape
-    nxt = next_cells(h, w)                                                   # (H*W, 4)
+    nxt = next_cells(h, w)  # (H*W, 4)
     grids = torch.as_tensor(np.stack([buffer.grids[i] for i in ids]))
     tokens = torch.as_tensor(vocab.encode_batch([buffer.instructions[i] for i in ids]))
     pred = model(grids, tokens).reshape(len(ids), -1)
@@ -192,13 +253,17 @@ def fitted_value_step(model, target_maps: dict, target_model, vocab: Vocabulary,
     reward = np.stack([buffer.reward[i].reshape(-1) for i in ids])
     terminal = np.stack([buffer.terminal[i].reshape(-1) for i in ids])
     visited = torch.as_tensor(np.stack([buffer.visited[i].reshape(-1) for i in ids]))
-    target = torch.as_tensor(np.where(terminal, reward, reward + cfg.gamma * v_next), dtype=torch.float32)
+    target = torch.as_tensor(
+        np.where(terminal, reward, reward + cfg.gamma * v_next), dtype=torch.float32
+    )
     error = (pred - target)[visited]
-    if cfg.priority > 0:  # prioritized regression: cells with large errors (goals found) weigh more
+    if (
+        cfg.priority > 0
+    ):  # prioritized regression: cells with large errors (goals found) weigh more
         weight = (error.detach().abs() + 0.1) ** cfg.priority
-        loss = (weight * error ** 2).sum() / weight.sum()
+        loss = (weight * error**2).sum() / weight.sum()
     else:
-        loss = (error ** 2).mean()
+        loss = (error**2).mean()
     opt.zero_grad()
     loss.backward()
     opt.step()
@@ -212,27 +277,51 @@ def make_envs(data: GroundingSet, cfg: RLConfig) -> list[GridWorldEnv]:
     return envs
 
 
-def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
-             cfg: RLConfig = RLConfig(), train_data: GroundingSet | None = None,
-             test_data: GroundingSet | None = None, envs: list | None = None,
-             progress: bool = True) -> tuple[Path, dict]:
-    """Train `model_name` by RL on `task`'s train split, evaluate on its test split, write
-    `out/rl_<task>_<model>.pt`. `envs` replaces the in-process environments (the ROS client)."""
+def train_rl(
+    task: str,
+    model_name: str,
+    data_dir: str | Path,
+    out: str | Path,
+    cfg: RLConfig = RLConfig(),
+    train_data: GroundingSet | None = None,
+    test_data: GroundingSet | None = None,
+    envs: list | None = None,
+    progress: bool = True,
+) -> tuple[Path, dict]:
+    """
+    Train `model_name` by RL on `task`'s train split and evaluate it.
+
+    Train `model_name` by RL on `task`'s train split, evaluate on its test split, write
+    `out/rl_<task>_<model>.pt`. `envs` replaces the in-process environments (the ROS client).
+    """
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
     rng = np.random.default_rng(cfg.seed)
-    train = train_data if train_data is not None else load_episodes(task, "train", str(data_dir))
-    test = test_data if test_data is not None else load_episodes(task, "test", str(data_dir))
+    train = train_data if train_data is not None else load_episodes(task, 'train', str(data_dir))
+    test = test_data if test_data is not None else load_episodes(task, 'test', str(data_dir))
     shape = tuple(train.grids.shape[1:])
-    cfg = RLConfig(**{**asdict(cfg), "step_limit": cfg.step_limit or 5 * max(shape),
-                      "mirrors": TASK_SETTINGS.get(task, {}).get("mirrors", True) if cfg.mirrors is None
-                      else cfg.mirrors})
+    cfg = RLConfig(
+        **{
+            **asdict(cfg),
+            'step_limit': cfg.step_limit or 5 * max(shape),
+            'mirrors': TASK_SETTINGS.get(task, {}).get('mirrors', True)
+            if cfg.mirrors is None
+            else cfg.mirrors,
+        }
+    )
     # the mirror images' swapped direction words are trained on too
-    vocab = Vocabulary.build(list(train.instructions) + [
-        mirror_instruction(t, axes) for t in train.instructions if cfg.mirrors
-        for axes in MIRROR_IMAGES])
-    mcfg = ModelConfig(n_entities=len(train.entities), vocab_size=len(vocab),
-                       embed_dim=train.entities.embed_dim)
+    vocab = Vocabulary.build(
+        list(train.instructions)
+        + [
+            mirror_instruction(t, axes)
+            for t in train.instructions
+            if cfg.mirrors
+            for axes in MIRROR_IMAGES
+        ]
+    )
+    mcfg = ModelConfig(
+        n_entities=len(train.entities), vocab_size=len(vocab), embed_dim=train.entities.embed_dim
+    )
     model = build_model(model_name, mcfg)
     target_model = copy.deepcopy(model)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
@@ -241,7 +330,7 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
     target_maps: dict[int, np.ndarray] = {}
     episodes, updates, log = 0, 0, []
     start = time.perf_counter()
-    warmup = int(cfg.episodes * cfg.attention_warmup) if getattr(model, "attention", False) else 0
+    warmup = int(cfg.episodes * cfg.attention_warmup) if getattr(model, 'attention', False) else 0
     while episodes < cfg.episodes:
         # as in supervised training: attention weights start at 0, so until they switch on
         # t-RNetAttn is exactly t-RNet and the 5-10x cheaper attention-free forward is used
@@ -256,100 +345,171 @@ def train_rl(task: str, model_name: str, data_dir: str | Path, out: str | Path,
         # 2. fitted value iteration on the replay buffer
         losses = []
         for _ in range(cfg.updates_per_round):
-            losses.append(fitted_value_step(model, target_maps, target_model, vocab, buffer,
-                                            opt, cfg, rng))
+            losses.append(
+                fitted_value_step(model, target_maps, target_model, vocab, buffer, opt, cfg, rng)
+            )
             updates += 1
             if updates % cfg.target_sync == 0:
                 target_model.load_state_dict(model.state_dict())
                 target_maps.clear()
         log.append((episodes, float(np.mean(returns)), float(np.mean(losses)), epsilon))
         if progress and (len(log) % 20 == 0 or episodes >= cfg.episodes):
-            print(f"{task} {model_name}: {episodes} episodes, return {np.mean([l[1] for l in log[-20:]]):.2f}, "
-                  f"loss {np.mean([l[2] for l in log[-20:]]):.3f}, epsilon {epsilon:.2f}, "
-                  f"{time.perf_counter() - start:.0f} s", flush=True)
+            print(
+                f'{task} {model_name}: {episodes} episodes, '
+                f'return {np.mean([row[1] for row in log[-20:]]):.2f}, '
+                f'loss {np.mean([row[2] for row in log[-20:]]):.3f}, epsilon {epsilon:.2f}, '
+                f'{time.perf_counter() - start:.0f} s',
+                flush=True,
+            )
     train_seconds = time.perf_counter() - start
     # 3. evaluate the predicted maps of the test split (true maps used only here)
-    metrics = world.evaluate_maps(predict(model, vocab, test), test.values, test.rewards, test.terminal)
-    summary = {"task": task, "model": model_name, "test": metrics, "episodes": episodes,
-               "transitions": len(buffer.transitions), "maps_seen": buffer.n_observed,
-               "updates": updates, "train_seconds": round(train_seconds, 1),
-               "rl_config": asdict(cfg)}
-    path = save_checkpoint(Path(out) / f"rl_{task}_{model_name}.pt", model_name, model, mcfg,
-                           vocab, train.entities, task=task, training="rl (fitted value iteration)",
-                           training_data=f"{train.name} ({len(train)} examples, rewards only)",
-                           seed=cfg.seed, test_metrics=metrics, train_seconds=summary["train_seconds"],
-                           rl_config=asdict(cfg),
-                           return_history=[[e, round(r, 4), round(lo, 5)] for e, r, lo, _ in log])
+    metrics = world.evaluate_maps(
+        predict(model, vocab, test), test.values, test.rewards, test.terminal
+    )
+    summary = {
+        'task': task,
+        'model': model_name,
+        'test': metrics,
+        'episodes': episodes,
+        'transitions': len(buffer.transitions),
+        'maps_seen': buffer.n_observed,
+        'updates': updates,
+        'train_seconds': round(train_seconds, 1),
+        'rl_config': asdict(cfg),
+    }
+    path = save_checkpoint(
+        Path(out) / f'rl_{task}_{model_name}.pt',
+        model_name,
+        model,
+        mcfg,
+        vocab,
+        train.entities,
+        task=task,
+        training='rl (fitted value iteration)',
+        training_data=f'{train.name} ({len(train)} examples, rewards only)',
+        seed=cfg.seed,
+        test_metrics=metrics,
+        train_seconds=summary['train_seconds'],
+        rl_config=asdict(cfg),
+        return_history=[[e, round(r, 4), round(lo, 5)] for e, r, lo, _ in log],
+    )
     return path, summary
 
 
 def cmd_rl_train(args) -> int:
-    cfg = RLConfig(seed=args.seed, threads=args.threads,
-                   **{k: v for k, v in (("episodes", args.episodes), ("envs", args.envs),
-                                        ("step_limit", args.step_limit),
-                                        ("updates_per_round", args.updates_per_round),
-                                        ("target_sync", args.target_sync),
-                                        ("batch_maps", args.batch_maps), ("lr", args.lr),
-                                        ("mirrors", args.mirrors),
-                                        ("attention_warmup", args.attention_warmup))
-                      if v is not None})
+    cfg = RLConfig(
+        seed=args.seed,
+        threads=args.threads,
+        **{
+            k: v
+            for k, v in (
+                ('episodes', args.episodes),
+                ('envs', args.envs),
+                ('step_limit', args.step_limit),
+                ('updates_per_round', args.updates_per_round),
+                ('target_sync', args.target_sync),
+                ('batch_maps', args.batch_maps),
+                ('lr', args.lr),
+                ('mirrors', args.mirrors),
+                ('attention_warmup', args.attention_warmup),
+            )
+            if v is not None
+        },
+    )
     train = test = None
-    if args.task.startswith("generator"):
+    if args.task.startswith('generator'):
         train = load_episodes(args.task, n=args.generated, seed=args.seed)
         test = load_episodes(args.task, n=max(50, args.generated // 5), seed=args.seed + 1000)
     if args.via_ros:
         from .ros.gridworld_client import ros_envs
 
         with ros_envs(args.task, args.data, train, cfg, args.seed) as envs:
-            path, summary = train_rl(args.task, args.model, args.data, args.out, cfg, train, test,
-                                     envs=envs, progress=not args.quiet)
+            path, summary = train_rl(
+                args.task,
+                args.model,
+                args.data,
+                args.out,
+                cfg,
+                train,
+                test,
+                envs=envs,
+                progress=not args.quiet,
+            )
     else:
-        path, summary = train_rl(args.task, args.model, args.data, args.out, cfg, train, test,
-                                 progress=not args.quiet)
-    print(json.dumps({"checkpoint": str(path), **summary}))
+        path, summary = train_rl(
+            args.task, args.model, args.data, args.out, cfg, train, test, progress=not args.quiet
+        )
+    print(json.dumps({'checkpoint': str(path), **summary}))
     return 0
 
 
 def register_cli(sub) -> None:
     from .cli import DEFAULT_DATA
 
-    p = sub.add_parser("rl-train", help="train a model by RL (fitted value iteration)")
-    p.add_argument("--task", required=True,
-                   choices=[*RL_TASKS, *(t for t in TASKS if t not in RL_TASKS),
-                            "generator-local", "generator-global", "generator-mixed"])
-    p.add_argument("--model", required=True, choices=list(MODELS))
-    p.add_argument("--data", default=DEFAULT_DATA)
-    p.add_argument("--out", default="out")
-    p.add_argument("--episodes", type=int, default=None)
-    p.add_argument("--envs", type=int, default=None, help="episodes side by side per round")
-    p.add_argument("--step-limit", type=int, default=None)
-    p.add_argument("--updates-per-round", type=int, default=None)
-    p.add_argument("--target-sync", type=int, default=None)
-    p.add_argument("--batch-maps", type=int, default=None)
-    p.add_argument("--lr", type=float, default=None)
-    p.add_argument("--mirrors", action=argparse.BooleanOptionalAction, default=None,
-                   help="also learn from the mirror images of each map (default: on for PuddleWorld)")
-    p.add_argument("--attention-warmup", type=float, default=None,
-                   help="share of episodes t-RNetAttn runs attention-free (default 0.85; 0: never)")
-    p.add_argument("--generated", type=int, default=500,
-                   help="number of generated training examples (generator-* tasks)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--threads", type=int, default=1)
-    p.add_argument("--via-ros", action="store_true",
-                   help="run episodes through the gridworld node's topics")
-    p.add_argument("--quiet", action="store_true")
+    p = sub.add_parser('rl-train', help='train a model by RL (fitted value iteration)')
+    p.add_argument(
+        '--task',
+        required=True,
+        choices=[
+            *RL_TASKS,
+            *(t for t in TASKS if t not in RL_TASKS),
+            'generator-local',
+            'generator-global',
+            'generator-mixed',
+        ],
+    )
+    p.add_argument('--model', required=True, choices=list(MODELS))
+    p.add_argument('--data', default=DEFAULT_DATA)
+    p.add_argument('--out', default='out')
+    p.add_argument('--episodes', type=int, default=None)
+    p.add_argument('--envs', type=int, default=None, help='episodes side by side per round')
+    p.add_argument('--step-limit', type=int, default=None)
+    p.add_argument('--updates-per-round', type=int, default=None)
+    p.add_argument('--target-sync', type=int, default=None)
+    p.add_argument('--batch-maps', type=int, default=None)
+    p.add_argument('--lr', type=float, default=None)
+    p.add_argument(
+        '--mirrors',
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help='also learn from the mirror images of each map (default: on for PuddleWorld)',
+    )
+    p.add_argument(
+        '--attention-warmup',
+        type=float,
+        default=None,
+        help='share of episodes t-RNetAttn runs attention-free (default 0.85; 0: never)',
+    )
+    p.add_argument(
+        '--generated',
+        type=int,
+        default=500,
+        help='number of generated training examples (generator-* tasks)',
+    )
+    p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--threads', type=int, default=1)
+    p.add_argument(
+        '--via-ros', action='store_true', help="run episodes through the gridworld node's topics"
+    )
+    p.add_argument('--quiet', action='store_true')
     p.set_defaults(func=cmd_rl_train)
 
-    r = sub.add_parser("reproduce-rl", help="RL rows of the paper's table: train, evaluate, "
-                                            "write rl.json and rl.md")
-    r.add_argument("--data", default=DEFAULT_DATA)
-    r.add_argument("--out", default="results")
-    r.add_argument("--checkpoints", default="out", help="where the RL checkpoints go")
-    r.add_argument("--tasks", nargs="+", default=list(RL_TASKS), choices=RL_TASKS)
-    r.add_argument("--models", nargs="+", default=["t-rnet-attn", "t-cnn"], choices=list(MODELS))
-    r.add_argument("--episodes-scale", type=float, default=1.0,
-                   help="multiply every episode budget (e.g. 0.05 for a quick check)")
-    r.add_argument("--jobs", type=int, default=2, help="runs in parallel, one thread each")
+    r = sub.add_parser(
+        'reproduce-rl',
+        help="RL rows of the paper's table: train, evaluate, write rl.json and rl.md",
+    )
+    r.add_argument('--data', default=DEFAULT_DATA)
+    r.add_argument('--out', default='results')
+    r.add_argument('--checkpoints', default='out', help='where the RL checkpoints go')
+    r.add_argument('--tasks', nargs='+', default=list(RL_TASKS), choices=RL_TASKS)
+    r.add_argument('--models', nargs='+', default=['t-rnet-attn', 't-cnn'], choices=list(MODELS))
+    r.add_argument(
+        '--episodes-scale',
+        type=float,
+        default=1.0,
+        help='multiply every episode budget (e.g. 0.05 for a quick check)',
+    )
+    r.add_argument('--jobs', type=int, default=2, help='runs in parallel, one thread each')
     r.set_defaults(func=cmd_reproduce_rl)
 
 
@@ -357,67 +517,105 @@ def register_cli(sub) -> None:
 
 # The paper's Table (RL, test split): (PQ, MD) per model and task.
 PAPER_RL = {
-    "t-cnn": {"pw-local": (0.89, 2.03), "pw-global": (0.91, 3.80), "isi": (0.74, 3.94)},
-    "t-uvfa": {"pw-local": (0.56, 4.71), "pw-global": (0.62, 6.28), "isi": (0.15, 4.61)},
-    "t-rnet-attn": {"pw-local": (0.91, 2.10), "pw-global": (0.93, 4.23), "isi": (0.84, 3.79)},
+    't-cnn': {'pw-local': (0.89, 2.03), 'pw-global': (0.91, 3.80), 'isi': (0.74, 3.94)},
+    't-uvfa': {'pw-local': (0.56, 4.71), 'pw-global': (0.62, 6.28), 'isi': (0.15, 4.61)},
+    't-rnet-attn': {'pw-local': (0.91, 2.10), 'pw-global': (0.93, 4.23), 'isi': (0.84, 3.79)},
 }
 # Episode budgets per task for `reproduce-rl`, the same for every model, sized for about an
 # hour on 2 cores. t-RNetAttn costs most: ISI's long instructions make its attention
 # phase (the last 15% of episodes) the slowest part.
-RL_EPISODES = {"pw-local": 16_000, "pw-global": 16_000, "isi": 12_000}
+RL_EPISODES = {'pw-local': 16_000, 'pw-global': 16_000, 'isi': 12_000}
 # relative cost per episode, to start the longest runs first
-RL_COST = {"t-rnet-attn": 10, "t-rnet": 3, "t-cnn": 1, "t-uvfa": 1}
+RL_COST = {'t-rnet-attn': 10, 't-rnet': 3, 't-cnn': 1, 't-uvfa': 1}
 
 
 def rl_table(results: list[dict]) -> str:
     """Markdown: ours beside the paper's PQ / MD."""
-    lines = ["| task | model | PQ ours | PQ paper | MD ours | MD paper | episodes | minutes |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    lines = [
+        '| task | model | PQ ours | PQ paper | MD ours | MD paper | episodes | minutes |',
+        '| --- | --- | --- | --- | --- | --- | --- | --- |',
+    ]
     for r in results:
-        pq, md = PAPER_RL.get(r["model"], {}).get(r["task"], (None, None))
-        lines.append(f"| {r['task']} | {r['model']} | {r['test']['pq']:.2f} | "
-                     f"{'-' if pq is None else f'{pq:.2f}'} | {r['test']['md']:.2f} | "
-                     f"{'-' if md is None else f'{md:.2f}'} | {r['episodes']} | "
-                     f"{r['train_seconds'] / 60:.1f} |")
-    return "\n".join(lines) + "\n"
+        pq, md = PAPER_RL.get(r['model'], {}).get(r['task'], (None, None))
+        lines.append(
+            f'| {r["task"]} | {r["model"]} | {r["test"]["pq"]:.2f} | '
+            f'{"-" if pq is None else f"{pq:.2f}"} | {r["test"]["md"]:.2f} | '
+            f'{"-" if md is None else f"{md:.2f}"} | {r["episodes"]} | '
+            f'{r["train_seconds"] / 60:.1f} |'
+        )
+    return '\n'.join(lines) + '\n'
 
 
-def reproduce_rl(data_dir: str, out: str, tasks=RL_TASKS, models=("t-rnet-attn", "t-cnn"),
-                 scale: float = 1.0, jobs: int = 2, checkpoints: str = "out") -> list[dict]:
-    """Train every (model, task) by RL in `jobs` parallel processes (one thread each), write
-    out/rl.json and out/rl.md."""
+def reproduce_rl(
+    data_dir: str,
+    out: str,
+    tasks=RL_TASKS,
+    models=('t-rnet-attn', 't-cnn'),
+    scale: float = 1.0,
+    jobs: int = 2,
+    checkpoints: str = 'out',
+) -> list[dict]:
+    """
+    Train every (model, task) by RL in `jobs` parallel processes.
+
+    Train every (model, task) by RL in `jobs` parallel processes (one thread each), write
+    out/rl.json and out/rl.md.
+    """
     from concurrent.futures import ProcessPoolExecutor
 
-    runs = sorted(((m, t) for m in models for t in tasks),
-                  key=lambda mt: -RL_EPISODES[mt[1]] * RL_COST[mt[0]] * (3 if mt[1] == "isi" else 1))
+    runs = sorted(
+        ((m, t) for m in models for t in tasks),
+        key=lambda mt: -RL_EPISODES[mt[1]] * RL_COST[mt[0]] * (3 if mt[1] == 'isi' else 1),
+    )
     cfgs = [RLConfig(episodes=max(1, int(RL_EPISODES[t] * scale))) for m, t in runs]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(train_rl, t, m, data_dir, checkpoints, cfg, progress=False)
-                   for (m, t), cfg in zip(runs, cfgs)]
+        futures = [
+            pool.submit(train_rl, t, m, data_dir, checkpoints, cfg, progress=False)
+            for (m, t), cfg in zip(runs, cfgs)
+        ]
         results = []
         for (m, t), f in zip(runs, futures):
             path, summary = f.result()
-            print(f"{t} {m}: PQ {summary['test']['pq']:.3f}  MD {summary['test']['md']:.2f}  "
-                  f"({summary['train_seconds'] / 60:.1f} min) -> {path}", flush=True)
-            results.append({**summary, "checkpoint": str(path)})
+            print(
+                f'{t} {m}: PQ {summary["test"]["pq"]:.3f}  MD {summary["test"]["md"]:.2f}  '
+                f'({summary["train_seconds"] / 60:.1f} min) -> {path}',
+                flush=True,
+            )
+            results.append({**summary, 'checkpoint': str(path)})
     # rows of earlier runs (other tasks or models) stay; the ones run now replace theirs
-    path = Path(out) / "rl.json"
-    earlier = json.loads(path.read_text())["results"] if path.is_file() else []
-    rows = {(r["task"], r["model"]): r for r in [*earlier, *results]}
+    path = Path(out) / 'rl.json'
+    earlier = json.loads(path.read_text())['results'] if path.is_file() else []
+    rows = {(r['task'], r['model']): r for r in [*earlier, *results]}
     order = {t: i for i, t in enumerate(RL_TASKS)}
-    results = sorted(rows.values(), key=lambda r: (order.get(r["task"], 9), r["model"]))
+    results = sorted(rows.values(), key=lambda r: (order.get(r['task'], 9), r['model']))
     Path(out).mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(
-        {"command": f"spatial-grounding reproduce-rl --data {data_dir} --out {out}",
-         "paper": PAPER_RL, "results": results}, indent=2) + "\n")
-    (Path(out) / "rl.md").write_text(
-        "RL goal navigation (fitted value iteration, rewards only), test split; paper = "
-        "Yang et al. 2020 Table 1.\n\n" + rl_table(results))
+    path.write_text(
+        json.dumps(
+            {
+                'command': f'spatial-grounding reproduce-rl --data {data_dir} --out {out}',
+                'paper': PAPER_RL,
+                'results': results,
+            },
+            indent=2,
+        )
+        + '\n'
+    )
+    (Path(out) / 'rl.md').write_text(
+        'RL goal navigation (fitted value iteration, rewards only), test split; paper = '
+        'Yang et al. 2020 Table 1.\n\n' + rl_table(results)
+    )
     print(rl_table(results))
     return results
 
 
 def cmd_reproduce_rl(args) -> int:
-    reproduce_rl(args.data, args.out, args.tasks, args.models, args.episodes_scale, args.jobs,
-                 args.checkpoints)
+    reproduce_rl(
+        args.data,
+        args.out,
+        args.tasks,
+        args.models,
+        args.episodes_scale,
+        args.jobs,
+        args.checkpoints,
+    )
     return 0

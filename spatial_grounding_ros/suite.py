@@ -1,4 +1,13 @@
-"""The reference suite: does a model send the robot to the cell a clear instruction names?
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The reference suite.
+
+Does a model send the robot to the cell a clear instruction names?
 
 Generated worlds at each size, every relation family of the generator (Janner et al.'s
 synthetic grammar) in equal numbers; per family and size, HIT (the share of maps whose
@@ -7,6 +16,7 @@ matters here, so no value iteration is run: the suite is cheap at 64x64.
 
     spatial-grounding suite --checkpoint pw_t-rnet-attn --sizes 10 32 64 --n 100 --json
 """
+
 from __future__ import annotations
 
 import json
@@ -20,46 +30,66 @@ from .checkpoints import load_checkpoint
 from .entities import PUDDLEWORLD
 from .generator import COMPOSITIONAL_FAMILIES, FAMILIES, GLOBAL_FAMILIES, LOCAL_FAMILIES, sample
 
-GROUPS = {"local": LOCAL_FAMILIES, "global": GLOBAL_FAMILIES, "compositional": COMPOSITIONAL_FAMILIES}
+GROUPS = {
+    'local': LOCAL_FAMILIES,
+    'global': GLOBAL_FAMILIES,
+    'compositional': COMPOSITIONAL_FAMILIES,
+}
 DEFAULT_SIZES = (10, 32, 64)
 
 
 def suite_worlds(family: str, size: int, n: int, seed: int):
-    """n (grid, instruction, goal) of one family and size; the same for every model."""
+    """Return n (grid, instruction, goal) of one family and size; the same for every model."""
     rng = np.random.default_rng([seed, size, FAMILIES.index(family)])
     return [sample(rng, family, size) for _ in range(n)]
 
 
 @torch.no_grad()
-def predict_maps(loaded, grids: np.ndarray, instructions: list[str], batch_size: int) -> np.ndarray:
+def predict_maps(
+    loaded, grids: np.ndarray, instructions: list[str], batch_size: int
+) -> np.ndarray:
     loaded.model.eval()
     out = []
     for i in range(0, len(grids), batch_size):
         tokens = torch.from_numpy(loaded.vocab.encode_batch(instructions[i:i + batch_size]))
         used = max(1, int((tokens != 0).sum(1).max()))
-        out.append(loaded.model(torch.from_numpy(grids[i:i + batch_size]), tokens[:, :used]).numpy())
+        out.append(
+            loaded.model(torch.from_numpy(grids[i:i + batch_size]), tokens[:, :used]).numpy()
+        )
     return np.concatenate(out)
 
 
 def _summary(distances: list[int]) -> dict:
     d = np.asarray(distances)
-    return {"hit": float(np.mean(d == 0)) if len(d) else None,
-            "md": float(np.mean(d)) if len(d) else None, "n": int(len(d))}
+    return {
+        'hit': float(np.mean(d == 0)) if len(d) else None,
+        'md': float(np.mean(d)) if len(d) else None,
+        'n': int(len(d)),
+    }
 
 
-def run_suite(checkpoint, sizes=DEFAULT_SIZES, n: int = 100, seed: int = 0,
-              families=FAMILIES, out: str | Path | None = None, failures_shown: int = 6,
-              progress: bool = True) -> dict:
+def run_suite(
+    checkpoint,
+    sizes=DEFAULT_SIZES,
+    n: int = 100,
+    seed: int = 0,
+    families=FAMILIES,
+    out: str | Path | None = None,
+    failures_shown: int = 6,
+    progress: bool = True,
+) -> dict:
     """Hit and MD per family and size, per group and size, per size, and overall."""
     if not sizes or min(sizes) < 5:
-        raise ValueError(f"suite sizes must be >= 5 (the generator's smallest world), got {list(sizes)}")
+        raise ValueError(
+            f"suite sizes must be >= 5 (the generator's smallest world), got {list(sizes)}"
+        )
     if n < 1:
-        raise ValueError(f"--n must be at least 1, got {n}")
+        raise ValueError(f'--n must be at least 1, got {n}')
     loaded = load_checkpoint(checkpoint, expect_entities=PUDDLEWORLD)
     distances = {f: {} for f in families}
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
-    for family, size in tqdm(jobs, desc="suite", disable=not progress, unit="family"):
+    for family, size in tqdm(jobs, desc='suite', disable=not progress, unit='family'):
         worlds = suite_worlds(family, size, n, seed)
         grids = np.stack([w[0] for w in worlds])
         texts = [w[1] for w in worlds]
@@ -70,53 +100,74 @@ def run_suite(checkpoint, sizes=DEFAULT_SIZES, n: int = 100, seed: int = 0,
         d = np.abs(pred - goals).sum(1)
         distances[family][size] = d.tolist()
         for i in np.flatnonzero(d)[:failures_shown]:
-            failures[family].append((size, grids[i], texts[i], tuple(goals[i]), tuple(pred[i]), maps[i]))
-    result = {"checkpoint": str(checkpoint), "model": loaded.name, "seed": seed, "n_per_family": n,
-              "sizes": {}, "groups": {}, "families": {}}
+            failures[family].append(
+                (size, grids[i], texts[i], tuple(goals[i]), tuple(pred[i]), maps[i])
+            )
+    result = {
+        'checkpoint': str(checkpoint),
+        'model': loaded.name,
+        'seed': seed,
+        'n_per_family': n,
+        'sizes': {},
+        'groups': {},
+        'families': {},
+    }
     for family in families:
-        result["families"][family] = {str(s): _summary(distances[family][s]) for s in sizes}
+        result['families'][family] = {str(s): _summary(distances[family][s]) for s in sizes}
     for group, members in GROUPS.items():
         members = [f for f in members if f in families]
         if members:
-            result["groups"][group] = {str(s): _summary([x for f in members for x in distances[f][s]])
-                                       for s in sizes}
+            result['groups'][group] = {
+                str(s): _summary([x for f in members for x in distances[f][s]]) for s in sizes
+            }
     for s in sizes:
-        result["sizes"][str(s)] = _summary([x for f in families for x in distances[f][s]])
+        result['sizes'][str(s)] = _summary([x for f in families for x in distances[f][s]])
     result.update(_summary([x for f in families for s in sizes for x in distances[f][s]]))
     if out is not None:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "suite.json").write_text(json.dumps(result, indent=1) + "\n")
-        result["failure_plots"] = [str(p) for p in plot_failures(out, failures)]
+        (out / 'suite.json').write_text(json.dumps(result, indent=1) + '\n')
+        result['failure_plots'] = [str(p) for p in plot_failures(out, failures)]
     return result
 
 
 def plot_failures(out: Path, failures: dict) -> list[Path]:
-    """One PNG per family with failures: each row a map (instruction above it), the true
-    goal (green circle) and the model's choice (red x) on the map and on the value map."""
+    """
+    One PNG per family with failures.
+
+    Each row a map (instruction above it), the true goal (green circle) and the model's choice (red
+    x) on the map and on the value map.
+    """
     from .plots import plt
+
     paths = []
     for family, cases in failures.items():
         if not cases:
             continue
         fig, axes = plt.subplots(len(cases), 2, figsize=(8, 4 * len(cases)), squeeze=False)
         for (size, grid, text, goal, pred, values), (ax_map, ax_val) in zip(cases, axes):
-            ax_map.imshow(grid == 1, cmap="Blues", vmin=0, vmax=2)
+            ax_map.imshow(grid == 1, cmap='Blues', vmin=0, vmax=2)
             if size <= 32:
                 for (r, c), e in np.ndenumerate(grid):
                     if e > 1:
-                        ax_map.text(c, r, PUDDLEWORLD.names[e][:3], ha="center", va="center",
-                                    fontsize=max(3, 70 // size))
-            ax_val.imshow(values, cmap="viridis")
+                        ax_map.text(
+                            c,
+                            r,
+                            PUDDLEWORLD.names[e][:3],
+                            ha='center',
+                            va='center',
+                            fontsize=max(3, 70 // size),
+                        )
+            ax_val.imshow(values, cmap='viridis')
             for ax in (ax_map, ax_val):
-                ax.plot(goal[1], goal[0], "o", mfc="none", mec="lime", ms=10, mew=2)
-                ax.plot(pred[1], pred[0], "x", color="red", ms=10, mew=2)
+                ax.plot(goal[1], goal[0], 'o', mfc='none', mec='lime', ms=10, mew=2)
+                ax.plot(pred[1], pred[0], 'x', color='red', ms=10, mew=2)
                 ax.set_xticks([])
                 ax.set_yticks([])
-            ax_map.set_title(f"{size}x{size}: {text}", fontsize=8, loc="left")
+            ax_map.set_title(f'{size}x{size}: {text}', fontsize=8, loc='left')
         fig.suptitle(f"{family}: failures (green o = named cell, red x = model's goal)")
         fig.tight_layout()
-        path = out / f"failures_{family}.png"
+        path = out / f'failures_{family}.png'
         fig.savefig(path, dpi=70)
         plt.close(fig)
         paths.append(path)
@@ -127,42 +178,66 @@ def markdown_table(results: dict[str, dict]) -> str:
     """Hit per family and size, one column per checkpoint (results: name -> run_suite())."""
     names = list(results)
     first = results[names[0]]
-    sizes = list(first["sizes"])
-    lines = ["| family | size | " + " | ".join(names) + " |",
-             "| --- | --- | " + " | ".join("---" for _ in names) + " |"]
-    for family in first["families"]:
+    sizes = list(first['sizes'])
+    lines = [
+        '| family | size | ' + ' | '.join(names) + ' |',
+        '| --- | --- | ' + ' | '.join('---' for _ in names) + ' |',
+    ]
+    for family in first['families']:
         for s in sizes:
-            cells = [f"{r['families'][family][s]['hit']:.1%}" for r in results.values()]
-            lines.append(f"| {family} | {s} | " + " | ".join(cells) + " |")
+            cells = [f'{r["families"][family][s]["hit"]:.1%}' for r in results.values()]
+            lines.append(f'| {family} | {s} | ' + ' | '.join(cells) + ' |')
     for s in sizes:
-        cells = [f"**{r['sizes'][s]['hit']:.1%}** (MD {r['sizes'][s]['md']:.2f})" for r in results.values()]
-        lines.append(f"| **all** | {s} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        cells = [
+            f'**{r["sizes"][s]["hit"]:.1%}** (MD {r["sizes"][s]["md"]:.2f})'
+            for r in results.values()
+        ]
+        lines.append(f'| **all** | {s} | ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines) + '\n'
 
 
 def cmd_suite(args) -> int:
-    result = run_suite(args.checkpoint, tuple(args.sizes), args.n, args.seed, tuple(args.families),
-                       args.out, progress=not args.json)
+    result = run_suite(
+        args.checkpoint,
+        tuple(args.sizes),
+        args.n,
+        args.seed,
+        tuple(args.families),
+        args.out,
+        progress=not args.json,
+    )
     if args.json:
         print(json.dumps(result))
         return 0
-    print(f"{result['model']} ({args.checkpoint}), {args.n} worlds per family and size, seed {args.seed}")
-    print(f"{'family':16s}" + "".join(f"{s:>16s}" for s in result["sizes"]))
-    for family, per_size in result["families"].items():
-        print(f"{family:16s}" + "".join(f"{v['hit']:>9.1%} MD{v['md']:4.2f}" for v in per_size.values()))
-    print(f"{'all':16s}" + "".join(f"{v['hit']:>9.1%} MD{v['md']:4.2f}" for v in result["sizes"].values()))
+    print(
+        f'{result["model"]} ({args.checkpoint}), {args.n} worlds per family and size, '
+        f'seed {args.seed}'
+    )
+    print(f'{"family":16s}' + ''.join(f'{s:>16s}' for s in result['sizes']))
+    for family, per_size in result['families'].items():
+        print(
+            f'{family:16s}'
+            + ''.join(f'{v["hit"]:>9.1%} MD{v["md"]:4.2f}' for v in per_size.values())
+        )
+    print(
+        f'{"all":16s}'
+        + ''.join(f'{v["hit"]:>9.1%} MD{v["md"]:4.2f}' for v in result['sizes'].values())
+    )
     if args.out:
-        print(f"wrote {Path(args.out) / 'suite.json'} and {len(result['failure_plots'])} failure PNGs")
+        print(
+            f'wrote {Path(args.out) / "suite.json"} and '
+            f'{len(result["failure_plots"])} failure PNGs'
+        )
     return 0
 
 
 def register_cli(sub) -> None:
-    p = sub.add_parser("suite", help="exact-goal rate per relation family on generated worlds")
-    p.add_argument("--checkpoint", default="pw_t-rnet-attn")
-    p.add_argument("--sizes", type=int, nargs="+", default=list(DEFAULT_SIZES))
-    p.add_argument("--n", type=int, default=100, help="worlds per family and size")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
-    p.add_argument("--json", action="store_true", help="print exactly one JSON object")
-    p.add_argument("--out", default=None, help="write suite.json and failure PNGs here")
+    p = sub.add_parser('suite', help='exact-goal rate per relation family on generated worlds')
+    p.add_argument('--checkpoint', default='pw_t-rnet-attn')
+    p.add_argument('--sizes', type=int, nargs='+', default=list(DEFAULT_SIZES))
+    p.add_argument('--n', type=int, default=100, help='worlds per family and size')
+    p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--families', nargs='+', default=list(FAMILIES), choices=FAMILIES)
+    p.add_argument('--json', action='store_true', help='print exactly one JSON object')
+    p.add_argument('--out', default=None, help='write suite.json and failure PNGs here')
     p.set_defaults(func=cmd_suite)

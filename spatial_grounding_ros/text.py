@@ -1,14 +1,21 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
 """Instruction text: tokenizer and vocabulary (padding and unknown-word ids reserved)."""
+
 from __future__ import annotations
 
-import re
 from collections import Counter
+import re
 from typing import Iterable
 
 import numpy as np
 
 PAD, UNK = 0, 1
-PAD_TOKEN, UNK_TOKEN = "<pad>", "<unk>"
+PAD_TOKEN, UNK_TOKEN = '<pad>', '<unk>'
 _WORD = re.compile(r"[a-z0-9]+(?:'[a-z]+)?")
 
 
@@ -25,7 +32,7 @@ class Vocabulary:
         self.index = {w: i for i, w in enumerate(self.words)}
 
     @classmethod
-    def build(cls, instructions: Iterable[str], min_count: int = 1) -> "Vocabulary":
+    def build(cls, instructions: Iterable[str], min_count: int = 1) -> 'Vocabulary':
         counts = Counter(w for text in instructions for w in tokenize(text))
         return cls(sorted(w for w, c in counts.items() if c >= min_count))
 

@@ -1,14 +1,24 @@
-"""Supervised training (value-map MSE plus a goal-cell cross-entropy) and evaluation,
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Supervised training and evaluation, readable top to bottom.
+
+Supervised training (value-map MSE plus a goal-cell cross-entropy) and evaluation,
 readable top to bottom.
 
 Adam at the paper's learning rate; a validation split carved out of train (by world)
 selects the checkpoint; the test split is only ever evaluated.
 """
+
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from pathlib import Path
+import time
 
 import numpy as np
 import torch
@@ -18,11 +28,16 @@ from tqdm import tqdm
 from . import world
 from .augment import with_mirrors
 from .checkpoints import save_checkpoint
-from .datasets import GroundingSet, load_task, load_world_instructions, pw_world_ids, split_by_world
-from .generator import MODES, generate
-from .models import ModelConfig, build_model
+from .datasets import (
+    GroundingSet,
+    load_task,
+    load_world_instructions,
+    pw_world_ids,
+    split_by_world,
+)
+from .generator import generate, MODES
+from .models import build_model, ModelConfig
 from .text import Vocabulary
-
 
 # Per-task settings, one row per task.
 # epochs: the budget (the validation split picks the best epoch within it). PuddleWorld
@@ -39,41 +54,61 @@ from .text import Vocabulary
 #   ISI keeps 0 until it is measured there: its rows were trained without it.
 # model: ModelConfig fields for this task's models. PuddleWorld's gradient maps rise by 1
 #   every 4.5 cells: exactly the paper's on 10x10, and the same per cell on larger maps.
-_PW = dict(synthetic=32000, world_instructions=True, mirrors=True, attention_warmup=0.85,
-           goal_weight=1.0, model={"gradient_cells": 4.5})
-TASK_SETTINGS = {
-    "pw-local":  dict(_PW, epochs=40),
-    "pw-global": dict(_PW, epochs=40),
-    "pw":        dict(_PW, epochs=40),
-    "isi":       dict(epochs=25, synthetic=0, world_instructions=False, mirrors=False,
-                      attention_warmup=0.0, goal_weight=0.0, model={}),
+_PW = {
+    'synthetic': 32000,
+    'world_instructions': True,
+    'mirrors': True,
+    'attention_warmup': 0.85,
+    'goal_weight': 1.0,
+    'model': {'gradient_cells': 4.5},
 }
-EPOCHS = {task: s["epochs"] for task, s in TASK_SETTINGS.items()}
+TASK_SETTINGS = {
+    'pw-local': dict(_PW, epochs=40),
+    'pw-global': dict(_PW, epochs=40),
+    'pw': dict(_PW, epochs=40),
+    'isi': {
+        'epochs': 25,
+        'synthetic': 0,
+        'world_instructions': False,
+        'mirrors': False,
+        'attention_warmup': 0.0,
+        'goal_weight': 0.0,
+        'model': {},
+    },
+}
+EPOCHS = {task: s['epochs'] for task, s in TASK_SETTINGS.items()}
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
 SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
-GENERATOR_MODE = {"pw-local": "local", "pw-global": "global", "pw": "mixed"}
+GENERATOR_MODE = {'pw-local': 'local', 'pw-global': 'global', 'pw': 'mixed'}
 
 
 @dataclass
 class TrainConfig:
-    """Training hyper-parameters. Adam at the paper's lr 1e-3; batch 64, not the paper's 512:
-    PW local has ~1400 training maps, so 512 gives 3 steps an epoch, and on a CPU budget
-    the number of steps, not the batch, is what limits the fit."""
-    epochs: int | None = None    # None: the task's (TASK_SETTINGS)
+    """
+    Training hyper-parameters.
+
+    Adam at the paper's lr 1e-3; batch 64, not the paper's 512: PW local has ~1400 training maps,
+    so 512 gives 3 steps an epoch, and on a CPU budget the number of steps, not the batch, is what
+    limits the fit.
+    """
+
+    epochs: int | None = None  # None: the task's (TASK_SETTINGS)
     batch_size: int = 64
     lr: float = 1e-3
-    lr_final: float = 1e-4       # cosine decay to this
-    val_fraction: float = 0.1    # of the training worlds
+    lr_final: float = 1e-4  # cosine decay to this
+    val_fraction: float = 0.1  # of the training worlds
     attention_warmup: float | None = None  # share of epochs with attention off; None: per task
     synthetic: int | None = None  # generated examples added to training; None: the task's
-    world_instructions: bool | None = None  # the training worlds' pickle instructions; None: the task's
-    mirrors: bool | None = None   # add mirrored copies of the human examples; None: the task's
+    # the training worlds' pickle instructions; None: the task's
+    world_instructions: bool | None = None
+    mirrors: bool | None = None  # add mirrored copies of the human examples; None: the task's
     goal_weight: float | None = None  # weight of the goal-cell cross-entropy; None: the task's
-    goal_scale: float = 5.0       # values times this are the goal cross-entropy's logits (at start)
-    learn_goal_scale: bool = True  # learn that temperature, so the CE can rank without warping values
-    select: str = "pq"           # checkpoint = epoch of the second half with the best validation
-                                 # PQ plus generated-validation HIT (ties: MSE), or "mse"
+    goal_scale: float = 5.0  # values times this are the goal cross-entropy's logits (at start)
+    # learn that temperature, so the CE can rank without warping values
+    learn_goal_scale: bool = True
+    select: str = 'pq'  # checkpoint = epoch of the second half with the best validation
+    # PQ plus generated-validation HIT (ties: MSE), or "mse"
     seed: int = 0
     threads: int = 2
 
@@ -83,14 +118,18 @@ def encode(vocab: Vocabulary, data: GroundingSet) -> tuple[torch.Tensor, torch.T
 
 
 def batches(lengths: np.ndarray, batch_size: int, rng: np.random.Generator) -> list[np.ndarray]:
-    """Shuffled batches of similar instruction length (sorted within pools of 8 batches),
-    so padding, which the per-pair attention pays for, stays short."""
+    """
+    Yield shuffled batches of similar instruction length.
+
+    Shuffled batches of similar instruction length (sorted within pools of 8 batches),
+    so padding, which the per-pair attention pays for, stays short.
+    """
     order = rng.permutation(len(lengths))
     pool = batch_size * 8
     out = []
     for i in range(0, len(order), pool):
         chunk = order[i:i + pool]
-        chunk = chunk[np.argsort(lengths[chunk], kind="stable")]
+        chunk = chunk[np.argsort(lengths[chunk], kind='stable')]
         out += [chunk[j:j + batch_size] for j in range(0, len(chunk), batch_size)]
     return [out[i] for i in rng.permutation(len(out))]
 
@@ -106,8 +145,10 @@ def predict(model, vocab: Vocabulary, data: GroundingSet, batch_size: int = 512)
     """Predicted value maps (N, H, W) for a data set."""
     model.eval()
     grids, tokens = encode(vocab, data)
-    out = [model(grids[i:i + batch_size], _trim(tokens[i:i + batch_size]))
-           for i in range(0, len(grids), batch_size)]
+    out = [
+        model(grids[i:i + batch_size], _trim(tokens[i:i + batch_size]))
+        for i in range(0, len(grids), batch_size)
+    ]
     return torch.cat(out).numpy()
 
 
@@ -117,29 +158,45 @@ def evaluate(model, vocab: Vocabulary, data: GroundingSet) -> dict:
 
 
 def evaluate_hit(model, vocab: Vocabulary, data: GroundingSet) -> float:
-    """The exact-goal rate alone (no score iteration): cheap enough for every epoch."""
+    """Return the exact-goal rate alone (no score iteration): cheap enough for every epoch."""
     return float(np.mean((world.argmax_cells(predict(model, vocab, data)) == data.goals).all(1)))
 
 
-def training_parts(task: str, train: GroundingSet, val: GroundingSet, tc: TrainConfig,
-                   data_dir: str | Path) -> list[GroundingSet]:
-    """What a task trains on, one GroundingSet per map size: the human examples (with their
-    mirror images), the training worlds' pickle instructions, generated worlds."""
+def training_parts(
+    task: str, train: GroundingSet, val: GroundingSet, tc: TrainConfig, data_dir: str | Path
+) -> list[GroundingSet]:
+    """
+    Return what a task trains on, one GroundingSet per map size.
+
+    The human examples (with their mirror images), the training worlds' pickle instructions,
+    generated worlds.
+    """
     human = with_mirrors(train) if tc.mirrors else train
     parts = [human]
     if tc.world_instructions:
         held_out = set(val.worlds)
-        modes = {"pw-local": ("local",), "pw-global": ("global",), "pw": ("local", "global")}[task]
-        parts.append(load_world_instructions(
-            data_dir, [w for w in pw_world_ids(data_dir, modes) if w not in held_out]))
+        modes = {'pw-local': ('local',), 'pw-global': ('global',), 'pw': ('local', 'global')}[task]
+        parts.append(
+            load_world_instructions(
+                data_dir, [w for w in pw_world_ids(data_dir, modes) if w not in held_out]
+            )
+        )
     if tc.synthetic:
         if task not in GENERATOR_MODE:
-            raise ValueError(f"--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld")
+            raise ValueError(
+                f'--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld'
+            )
         for n, (size, share) in enumerate(SYNTHETIC_SIZES):
             count = int(round(tc.synthetic * share))
             if count:
-                parts.append(generate(count, seed=10_000 + 100 * tc.seed + n, mode=GENERATOR_MODE[task],
-                                      size=size))
+                parts.append(
+                    generate(
+                        count,
+                        seed=10_000 + 100 * tc.seed + n,
+                        mode=GENERATOR_MODE[task],
+                        size=size,
+                    )
+                )
     # one set per map size, so that a batch holds maps of one size
     by_size: dict[tuple, list[GroundingSet]] = {}
     for part in parts:
@@ -148,9 +205,12 @@ def training_parts(task: str, train: GroundingSet, val: GroundingSet, tc: TrainC
 
 
 def goal_loss(pred: torch.Tensor, goals: torch.Tensor, scale) -> torch.Tensor:
-    """Cross-entropy of the goal cell over the map's cells, the values times `scale` as
-    logits. MSE alone barely penalises a peak one cell off (neighbouring true values differ
-    by 10%), so the argmax often lands beside the goal, or on the object named."""
+    """
+    Cross-entropy of the goal cell over the map's cells, the values times `scale` as logits.
+
+    MSE alone barely penalises a peak one cell off (neighbouring true values differ by 10%), so the
+    argmax often lands beside the goal, or on the object named.
+    """
     b, h, w = pred.shape
     return F.cross_entropy(pred.reshape(b, h * w) * scale, goals[:, 0] * w + goals[:, 1])
 
@@ -163,56 +223,92 @@ def generated_validation(task: str, seed: int, per_family: int = 40) -> Groundin
     return generate(per_family * len(families), seed=20_000 + seed, mode=GENERATOR_MODE[task])
 
 
-def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str | Path,
-                     tc: TrainConfig = TrainConfig(), train_data: GroundingSet | None = None,
-                     progress: bool = True, **model_options) -> tuple[Path, dict]:
-    """Train `model_name` on `task`, keep the epoch with the best validation score, write
-    `out/<task>_<model>.pt`; returns its path and a summary."""
+def train_supervised(
+    task: str,
+    model_name: str,
+    data_dir: str | Path,
+    out: str | Path,
+    tc: TrainConfig = TrainConfig(),
+    train_data: GroundingSet | None = None,
+    progress: bool = True,
+    **model_options,
+) -> tuple[Path, dict]:
+    """
+    Train `model_name` on `task` and keep the epoch with the best validation score.
+
+    Train `model_name` on `task`, keep the epoch with the best validation score, write
+    `out/<task>_<model>.pt`; returns its path and a summary.
+    """
     settings = TASK_SETTINGS[task]
-    tc = TrainConfig(**{**vars(tc), **{key: value for key, value in settings.items()
-                                       if key != "model" and getattr(tc, key) is None}})
-    model_options = {**settings["model"], **model_options}
+    tc = TrainConfig(
+        **{
+            **vars(tc),
+            **{
+                key: value
+                for key, value in settings.items()
+                if key != 'model' and getattr(tc, key) is None
+            },
+        }
+    )
+    model_options = {**settings['model'], **model_options}
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
-    data = train_data if train_data is not None else load_task(task, "train", data_dir)
+    data = train_data if train_data is not None else load_task(task, 'train', data_dir)
     train, val = split_by_world(data, tc.val_fraction, tc.seed)
     parts = training_parts(task, train, val, tc, data_dir)
     val_generated = generated_validation(task, tc.seed) if tc.synthetic else None
     # from everything trained on: generated phrasing and the mirrors' swapped direction words
     vocab = Vocabulary.build(list(data.instructions) + [t for p in parts for t in p.instructions])
-    cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab),
-                      embed_dim=data.entities.embed_dim, **model_options)
+    cfg = ModelConfig(
+        n_entities=len(data.entities),
+        vocab_size=len(vocab),
+        embed_dim=data.entities.embed_dim,
+        **model_options,
+    )
     model = build_model(model_name, cfg)
     # log of the goal logits' temperature; learned, it lets the cross-entropy ask for the right
     # argmax without pulling the values away from the MSE's (it is not part of the model)
     goal_log_scale = torch.tensor(float(np.log(tc.goal_scale)), requires_grad=tc.learn_goal_scale)
-    opt = torch.optim.Adam([*model.parameters()] + ([goal_log_scale] if tc.learn_goal_scale else []),
-                           lr=tc.lr)
+    opt = torch.optim.Adam(
+        [*model.parameters()] + ([goal_log_scale] if tc.learn_goal_scale else []), lr=tc.lr
+    )
     encoded = []
     for part in parts:
         grids, tokens = encode(vocab, part)
-        encoded.append((grids, tokens, torch.from_numpy(part.values), torch.from_numpy(part.goals),
-                        (tokens != 0).sum(1).numpy()))
+        encoded.append(
+            (
+                grids,
+                tokens,
+                torch.from_numpy(part.values),
+                torch.from_numpy(part.goals),
+                (tokens != 0).sum(1).numpy(),
+            )
+        )
     steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
-    warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, "attention", False) else 0
+    warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, 'attention', False) else 0
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(
-        opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final)
+        opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final
+    )
     rng = np.random.default_rng(tc.seed)
-    best = ((float("inf"),), None, -1)
+    best = ((float('inf'),), None, -1)
     history = []
     start = time.perf_counter()
-    bar = tqdm(range(tc.epochs), desc=f"{task} {model_name}", disable=not progress, unit="ep")
+    bar = tqdm(range(tc.epochs), desc=f'{task} {model_name}', disable=not progress, unit='ep')
     for epoch in bar:
         model.train()
         if warmup:  # uniform attention (attn weights still 0) == t-RNet, 5-10x cheaper a step
             model.attention_on = epoch >= warmup
             if epoch == warmup:  # attention starts learning: give it a full schedule of its own
                 for group in opt.param_groups:
-                    group["lr"] = tc.lr
+                    group['lr'] = tc.lr
                 sched = torch.optim.lr_scheduler.CosineAnnealingLR(
-                    opt, T_max=(tc.epochs - warmup) * steps_per_epoch, eta_min=tc.lr_final)
-        plan = [(p, idx) for p, (*_, lengths) in enumerate(encoded)
-                for idx in batches(lengths, tc.batch_size, rng)]
+                    opt, T_max=(tc.epochs - warmup) * steps_per_epoch, eta_min=tc.lr_final
+                )
+        plan = [
+            (p, idx)
+            for p, (*_, lengths) in enumerate(encoded)
+            for idx in batches(lengths, tc.batch_size, rng)
+        ]
         losses = []
         for p in rng.permutation(len(plan)):
             part, idx = plan[p]
@@ -229,30 +325,55 @@ def train_supervised(task: str, model_name: str, data_dir: str | Path, out: str 
             losses.append(loss.item())
         val_metrics = evaluate(model, vocab, val)
         val_hit = evaluate_hit(model, vocab, val_generated) if val_generated is not None else 0.0
-        history.append((float(np.mean(losses)), val_metrics["mse"], val_metrics["pq"], val_hit))
-        score = ((-(val_metrics["pq"] + val_hit), val_metrics["mse"]) if tc.select == "pq"
-                 else (val_metrics["mse"],))
+        history.append((float(np.mean(losses)), val_metrics['mse'], val_metrics['pq'], val_hit))
+        score = (
+            (-(val_metrics['pq'] + val_hit), val_metrics['mse'])
+            if tc.select == 'pq'
+            else (val_metrics['mse'],)
+        )
         # PQ of a few hundred maps swings while the maps are still rough (PW: validation PQ
         # 0.937 at epoch 5 of 40, MSE 0.373), so PQ only chooses among the second half
-        if score < best[0] and (tc.select != "pq" or epoch >= tc.epochs // 2):
+        if score < best[0] and (tc.select != 'pq' or epoch >= tc.epochs // 2):
             best = (score, {k: v.clone() for k, v in model.state_dict().items()}, epoch)
-        bar.set_postfix(train=f"{np.mean(losses):.3f}", val_mse=f"{val_metrics['mse']:.3f}",
-                        val_pq=f"{val_metrics['pq']:.3f}", gen_hit=f"{val_hit:.3f}", best=best[2],
-                        scale=f"{goal_log_scale.exp().item():.1f}")
+        bar.set_postfix(
+            train=f'{np.mean(losses):.3f}',
+            val_mse=f'{val_metrics["mse"]:.3f}',
+            val_pq=f'{val_metrics["pq"]:.3f}',
+            gen_hit=f'{val_hit:.3f}',
+            best=best[2],
+            scale=f'{goal_log_scale.exp().item():.1f}',
+        )
     train_seconds = time.perf_counter() - start
     model.load_state_dict(best[1])
     val_metrics = evaluate(model, vocab, val)
     if val_generated is not None:
-        val_metrics["generated_hit"] = evaluate_hit(model, vocab, val_generated)
+        val_metrics['generated_hit'] = evaluate_hit(model, vocab, val_generated)
     n_train = sum(len(p) for p in parts)
-    summary = {"task": task, "train_examples": n_train, "val_examples": len(val),
-               "best_epoch": best[2], "epochs": tc.epochs, "train_seconds": round(train_seconds, 1),
-               "val": val_metrics, "train_config": vars(tc).copy()}
-    path = save_checkpoint(Path(out) / f"{task}_{model_name}.pt", model_name, model, cfg, vocab,
-                           data.entities, task=task,
-                           training_data=f"{data.name} ({n_train} train / {len(val)} validation, by world)",
-                           seed=tc.seed, best_epoch=best[2], val_metrics=val_metrics,
-                           goal_scale=round(float(goal_log_scale.exp()), 3),
-                           train_seconds=summary["train_seconds"], train_config=vars(tc).copy(),
-                           loss_history=[[round(x, 5) for x in row] for row in history])
+    summary = {
+        'task': task,
+        'train_examples': n_train,
+        'val_examples': len(val),
+        'best_epoch': best[2],
+        'epochs': tc.epochs,
+        'train_seconds': round(train_seconds, 1),
+        'val': val_metrics,
+        'train_config': vars(tc).copy(),
+    }
+    path = save_checkpoint(
+        Path(out) / f'{task}_{model_name}.pt',
+        model_name,
+        model,
+        cfg,
+        vocab,
+        data.entities,
+        task=task,
+        training_data=f'{data.name} ({n_train} train / {len(val)} validation, by world)',
+        seed=tc.seed,
+        best_epoch=best[2],
+        val_metrics=val_metrics,
+        goal_scale=round(float(goal_log_scale.exp()), 3),
+        train_seconds=summary['train_seconds'],
+        train_config=vars(tc).copy(),
+        loss_history=[[round(x, 5) for x in row] for row in history],
+    )
     return path, summary

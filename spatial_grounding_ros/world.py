@@ -1,4 +1,11 @@
-"""Grid world model: the MDP, value iteration, the policy of a value map, and the metrics.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Grid world model: the MDP, value iteration, the policy of a value map, and the metrics.
 
 Conventions (shared by every data set and the ROS layer):
 - a grid is an (H, W) integer array of entity indices; row 0 is the top (north) row;
@@ -13,6 +20,7 @@ MSE over all cells, MD between argmax cells, PQ from score iteration of the soft
 and HIT, the exact-goal rate, which MD averages away.
 Everything here is batched numpy over maps: no Python loop over cells.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -22,7 +30,7 @@ GOAL_REWARD = 3.0
 PUDDLE_REWARD = -1.0
 # (d_row, d_col) of the 4 moves, in Janner's order: up, down, left, right.
 ACTIONS = np.array([(-1, 0), (1, 0), (0, -1), (0, 1)])
-ACTION_NAMES = ("up", "down", "left", "right")
+ACTION_NAMES = ('up', 'down', 'left', 'right')
 
 
 def next_cell_indices(height: int, width: int) -> np.ndarray:
@@ -34,16 +42,17 @@ def next_cell_indices(height: int, width: int) -> np.ndarray:
 
 
 def step_cell(cell: tuple[int, int], action: int, shape: tuple[int, int]) -> tuple[int, int]:
-    """The cell one move leads to (off-map moves stay put)."""
+    """Return the cell one move leads to (off-map moves stay put)."""
     if not 0 <= int(action) < len(ACTIONS):
-        raise ValueError(f"action {action} is out of range 0..{len(ACTIONS) - 1}")
+        raise ValueError(f'action {action} is out of range 0..{len(ACTIONS) - 1}')
     r = min(max(cell[0] + int(ACTIONS[action][0]), 0), shape[0] - 1)
     c = min(max(cell[1] + int(ACTIONS[action][1]), 0), shape[1] - 1)
     return r, c
 
 
 def reward_map(obstacles: np.ndarray, goal: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Reward and terminal maps for one goal: -1 on obstacle cells, +3 (terminal) at the goal.
+    """
+    Reward and terminal maps for one goal: -1 on obstacle cells, +3 (terminal) at the goal.
 
     The goal reward adds to the cell's own (a goal inside a puddle carries 2), as in the
     PuddleWorld pickles.
@@ -55,9 +64,15 @@ def reward_map(obstacles: np.ndarray, goal: tuple[int, int]) -> tuple[np.ndarray
     return rewards, terminal
 
 
-def value_iteration(rewards: np.ndarray, terminal: np.ndarray, gamma: float = GAMMA,
-                    tol: float = 1e-6, max_iter: int = 10_000) -> np.ndarray:
-    """Optimal state values V(s) = R(s) + gamma * max_a V(next(s, a)); V = R at terminal cells.
+def value_iteration(
+    rewards: np.ndarray,
+    terminal: np.ndarray,
+    gamma: float = GAMMA,
+    tol: float = 1e-6,
+    max_iter: int = 10_000,
+) -> np.ndarray:
+    """
+    Optimal state values V(s) = R(s) + gamma * max_a V(next(s, a)); V = R at terminal cells.
 
     rewards, terminal: (H, W) or (B, H, W). Returns values of the same shape.
     """
@@ -80,7 +95,11 @@ def value_iteration(rewards: np.ndarray, terminal: np.ndarray, gamma: float = GA
 
 
 def greedy_policy(values: np.ndarray) -> np.ndarray:
-    """Greedy action index per cell of a value map (H, W) -> (H, W): the move to the best next cell."""
+    """
+    Greedy action index per cell of a value map (H, W) -> (H, W).
+
+    The move to the best next cell.
+    """
     h, w = values.shape
     return values.reshape(-1)[next_cell_indices(h, w)].argmax(axis=1).reshape(h, w)
 
@@ -94,9 +113,16 @@ def softmax_policy(values: np.ndarray) -> np.ndarray:
     return e / e.sum(axis=2, keepdims=True)
 
 
-def policy_scores(values: np.ndarray, rewards: np.ndarray, terminal: np.ndarray,
-                  gamma: float = GAMMA, tol: float = 0.01, max_iter: int = 10_000) -> np.ndarray:
-    """Janner's score iteration: S(s) = R(s) at terminal cells, else R(s) + gamma * E_pi[S(next)].
+def policy_scores(
+    values: np.ndarray,
+    rewards: np.ndarray,
+    terminal: np.ndarray,
+    gamma: float = GAMMA,
+    tol: float = 0.01,
+    max_iter: int = 10_000,
+) -> np.ndarray:
+    """
+    Janner's score iteration: S(s) = R(s) at terminal cells, else R(s) + gamma * E_pi[S(next)].
 
     Iterates until the summed absolute change of each map is below `tol` (0.01 as in the
     reference code). Batched: (B, H, W) inputs, (B,) mean score per map.
@@ -133,8 +159,9 @@ def manhattan_distances(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
     return np.abs(argmax_cells(pred) - argmax_cells(true)).sum(axis=1)
 
 
-def policy_quality(pred: np.ndarray, true: np.ndarray, rewards: np.ndarray,
-                   terminal: np.ndarray) -> np.ndarray:
+def policy_quality(
+    pred: np.ndarray, true: np.ndarray, rewards: np.ndarray, terminal: np.ndarray
+) -> np.ndarray:
     """(B,) PQ = (score(pred) - score(uniform)) / (score(true) - score(uniform))."""
     uniform = np.ones_like(true)
     sp = policy_scores(pred, rewards, terminal)
@@ -143,16 +170,20 @@ def policy_quality(pred: np.ndarray, true: np.ndarray, rewards: np.ndarray,
     return (sp - su) / (st - su)
 
 
-def evaluate_maps(pred: np.ndarray, true: np.ndarray, rewards: np.ndarray,
-                  terminal: np.ndarray) -> dict:
-    """The paper's value-map metrics over a set of maps (all (B, H, W)), and HIT: the share
-    of maps whose predicted argmax is the goal cell (the true map's unique maximum)."""
+def evaluate_maps(
+    pred: np.ndarray, true: np.ndarray, rewards: np.ndarray, terminal: np.ndarray
+) -> dict:
+    """
+    Return the paper's value-map metrics over a set of maps (all (B, H, W)), and HIT.
+
+    The share of maps whose predicted argmax is the goal cell (the true map's unique maximum).
+    """
     pred, true = np.asarray(pred, np.float64), np.asarray(true, np.float64)
     distances = manhattan_distances(pred, true)
     return {
-        "mse": mse(pred, true),
-        "pq": float(np.mean(policy_quality(pred, true, rewards, terminal))),
-        "md": float(np.mean(distances)),
-        "hit": float(np.mean(distances == 0)),
-        "n": int(len(pred)),
+        'mse': mse(pred, true),
+        'pq': float(np.mean(policy_quality(pred, true, rewards, terminal))),
+        'md': float(np.mean(distances)),
+        'hit': float(np.mean(distances == 0)),
+        'n': int(len(pred)),
     }

@@ -1,8 +1,19 @@
-"""Shared test set-up. Tests that need the real data sets use the `data_dir` fixture, which
-skips them (with the reason) when ../shared/data is absent."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Shared test set-up.
+
+Tests that need the real data sets use the `data_dir` fixture, which skips them (with the reason)
+when ../shared/data is absent.
+"""
+
 import os
-import random
 from pathlib import Path
+import random
 
 import pytest
 
@@ -22,8 +33,11 @@ def data_dir() -> Path:
 
 
 class RosGraph:
-    """A fresh rclpy Context whose nodes spin in a background executor thread. Tests wait
-    on what the nodes received with wait_for(); close() destroys every node added."""
+    """
+    A fresh rclpy Context whose nodes spin in a background executor thread.
+
+    Tests wait on what the nodes received with wait_for(); close() destroys every node added.
+    """
 
     def __init__(self):
         import threading
@@ -73,7 +87,7 @@ class RosGraph:
 
 @pytest.fixture
 def ros_context():
-    """A RosGraph for one test (see RosGraph)."""
+    """Provide a RosGraph for one test (see RosGraph)."""
     pytest.importorskip('rclpy', reason='rclpy is not installed')
     graph = RosGraph()
     yield graph
@@ -82,7 +96,7 @@ def ros_context():
 
 @pytest.fixture(scope='module')
 def ros_module_context():
-    """A RosGraph shared by a test module, so its nodes start once."""
+    """Provide a RosGraph shared by a test module, so its nodes start once."""
     pytest.importorskip('rclpy', reason='rclpy is not installed')
     graph = RosGraph()
     yield graph

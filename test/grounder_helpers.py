@@ -1,31 +1,44 @@
-"""Shared by the grounder node tests: small checkpoints that need no training, and a probe
-node that talks to the grounder over DDS and keeps everything it hears."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Shared by the grounder node tests.
+
+Small checkpoints that need no training, and a probe node that talks to the grounder over DDS and
+keeps everything it hears.
+"""
+
 from __future__ import annotations
 
 import itertools
 import os
+from pathlib import Path
 import secrets
 import signal
 import subprocess
-from pathlib import Path
 
 import numpy as np
-import torch
-
 from spatial_grounding_ros.checkpoints import save_checkpoint
 from spatial_grounding_ros.entities import PUDDLEWORLD
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.models import ModelConfig, build_model
+from spatial_grounding_ros.models import build_model, ModelConfig
 from spatial_grounding_ros.text import Vocabulary
+import torch
 
 MODEL = 't-rnet-attn'
 
 
 def unique_namespace(base: str) -> str:
-    """`/<base>_<pid>_<random>`: a namespace of this run's own. The ROS_DOMAIN_ID of a run is
-    one of 100, so two runs on one host can share a domain; in their own namespaces they
-    cannot hear each other's maps, instructions or goals (or diagnostics, which the probe
-    filters by the node's full name)."""
+    """
+    `/<base>_<pid>_<random>`: a namespace of this run's own.
+
+    The ROS_DOMAIN_ID of a run is one of 100, so two runs on one host can share a domain; in their
+    own namespaces they cannot hear each other's maps, instructions or goals (or diagnostics, which
+    the probe filters by the node's full name).
+    """
     return f'/{base}_{os.getpid()}_{secrets.token_hex(3)}'
 
 
@@ -34,19 +47,27 @@ def generator_vocabulary() -> Vocabulary:
 
 
 def random_checkpoint(path: Path) -> Path:
-    """Seeded, untrained t-RNetAttn: its answer depends on the whole grid and text, so a
-    node that flipped or mangled its input would disagree with the Python API."""
+    """
+    Seeded, untrained t-RNetAttn.
+
+    Its answer depends on the whole grid and text, so a node that flipped or mangled its input
+    would disagree with the Python API.
+    """
     vocab = generator_vocabulary()
     cfg = ModelConfig(n_entities=len(PUDDLEWORLD), vocab_size=len(vocab))
     torch.manual_seed(0)
-    return save_checkpoint(path, MODEL, build_model(MODEL, cfg), cfg, vocab, PUDDLEWORLD,
-                           task='test: random weights')
+    return save_checkpoint(
+        path, MODEL, build_model(MODEL, cfg), cfg, vocab, PUDDLEWORLD, task='test: random weights'
+    )
 
 
 def north_east_checkpoint(path: Path) -> Path:
-    """t-RNetAttn with hand-set weights whose value map is 0.1*G1 - G2: largest in data-set
-    row 0 (north, G2 = -1) and then in the last column (east, G1 = +1), whatever the map or
-    instruction. The model's own notion of north, with no training involved."""
+    """
+    t-RNetAttn with hand-set weights whose value map is 0.1*G1 - G2.
+
+    Largest in data-set row 0 (north, G2 = -1) and then in the last column (east, G1 = +1),
+    whatever the map or instruction. The model's own notion of north, with no training involved.
+    """
     vocab = generator_vocabulary()
     cfg = ModelConfig(n_entities=len(PUDDLEWORLD), vocab_size=len(vocab), head=())
     model = build_model(MODEL, cfg)
@@ -54,29 +75,32 @@ def north_east_checkpoint(path: Path) -> Path:
         for p in model.parameters():
             p.zero_()
         model.decoder.bias[-3:] = torch.tensor([0.1, -1.0, 0.0])  # Z2 = b1*G1 + b2*G2 + b3*J
-        model.head.convs[0].weight[0, 1, 1, 1] = 1.0              # value = Z2 (centre tap)
-    return save_checkpoint(path, MODEL, model, cfg, vocab, PUDDLEWORLD,
-                           task='test: hand-set north-east model')
+        model.head.convs[0].weight[0, 1, 1, 1] = 1.0  # value = Z2 (centre tap)
+    return save_checkpoint(
+        path, MODEL, model, cfg, vocab, PUDDLEWORLD, task='test: hand-set north-east model'
+    )
 
 
 def make_probe(context, namespace: str, grounder_name: str):
-    """A node that publishes entity maps and instructions into `namespace` and records the
-    grounder's outputs, its diagnostics and its /rosout lines."""
+    """
+    Return a node that publishes maps and instructions and records the grounder's outputs.
+
+    A node that publishes entity maps and instructions into `namespace` and records the
+    grounder's outputs, its diagnostics and its /rosout lines.
+    """
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import OccupancyGrid
     from rcl_interfaces.msg import Log
     from rclpy.node import Node
-    from std_msgs.msg import Float32MultiArray, Header, String
-
     from spatial_grounding_ros.ros import convert
     from spatial_grounding_ros.ros.grounder_node import LATCHED
+    from std_msgs.msg import Float32MultiArray, Header, String
 
     logger_name = grounder_name.strip('/').replace('/', '.')  # how /rosout names its lines
 
     class GrounderProbe(Node):
-        RECORDS = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics',
-                   'warnings')
+        RECORDS = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics', 'warnings')
 
         def __init__(self):
             super().__init__('grounder_probe', namespace=namespace, context=context)
@@ -109,22 +133,36 @@ def make_probe(context, namespace: str, grounder_name: str):
                 self.warnings.append(msg.msg)
 
         def holds(self, message) -> bool:
-            """Whether the grounder said (its OK `entity_map` diagnostic) that it holds the map
-            `message`, told apart from earlier maps by its stamp."""
-            stamp = {'stamp_sec': str(message.header.stamp.sec),
-                     'stamp_nanosec': str(message.header.stamp.nanosec)}
-            return any(s.name == f'{grounder_name}: entity_map' and s.level == DiagnosticStatus.OK
-                       and stamp.items() <= {v.key: v.value for v in s.values}.items()
-                       for s in self.diagnostics)
+            """
+            Tell whether the grounder said that it holds the map `message`.
+
+            Whether the grounder said (its OK `entity_map` diagnostic) that it holds the map
+            `message`, told apart from earlier maps by its stamp.
+            """
+            stamp = {
+                'stamp_sec': str(message.header.stamp.sec),
+                'stamp_nanosec': str(message.header.stamp.nanosec),
+            }
+            return any(
+                s.name == f'{grounder_name}: entity_map'
+                and s.level == DiagnosticStatus.OK
+                and stamp.items() <= {v.key: v.value for v in s.values}.items()
+                for s in self.diagnostics
+            )
 
         def connected(self) -> bool:
-            return (self.instruction_pub.get_subscription_count() > 0
-                    and self.map_pub.get_subscription_count() > 0
-                    and self.count_publishers(f'{namespace}/goal_pose') > 0)
+            return (
+                self.instruction_pub.get_subscription_count() > 0
+                and self.map_pub.get_subscription_count() > 0
+                and self.count_publishers(f'{namespace}/goal_pose') > 0
+            )
 
         def publish_map(self, grid=None, info=None, frame_id='map', message=None):
-            """Publish an entity map (a data-set grid, or a ready message); returns it. Each
-            map gets a distinct stamp so a test can tell which one the grounder holds."""
+            """
+            Publish an entity map (a data-set grid, or a ready message); returns it.
+
+            Each map gets a distinct stamp so a test can tell which one the grounder holds.
+            """
             if message is None:
                 header = Header(frame_id=frame_id)
                 message = convert.grid_to_occupancy_grid(np.asarray(grid), header, info)

@@ -1,21 +1,33 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
 """Mirror augmentation: mirrored examples are exactly correct examples."""
+
 from collections import Counter
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import datasets, generator, world
-from spatial_grounding_ros.augment import (SWAP_LEFT_RIGHT, SWAP_UP_DOWN, mirror, swap_words,
-                                           with_mirrors)
+from spatial_grounding_ros.augment import (
+    mirror,
+    SWAP_LEFT_RIGHT,
+    SWAP_UP_DOWN,
+    swap_words,
+    with_mirrors,
+)
 from spatial_grounding_ros.text import tokenize
 
 
-@pytest.mark.parametrize("axis", [1, 2])
+@pytest.mark.parametrize('axis', [1, 2])
 def test_mirrored_value_maps_are_the_true_ones(axis):
-    data = generator.generate(20, seed=3, mode="mixed")
+    data = generator.generate(20, seed=3, mode='mixed')
     flipped = mirror(data, axis)
-    np.testing.assert_allclose(world.value_iteration(flipped.rewards, flipped.terminal),
-                               flipped.values, atol=1e-4)
+    np.testing.assert_allclose(
+        world.value_iteration(flipped.rewards, flipped.terminal), flipped.values, atol=1e-4
+    )
     np.testing.assert_array_equal(world.argmax_cells(flipped.values), flipped.goals)
     twice = mirror(flipped, axis)
     np.testing.assert_array_equal(twice.grids, data.grids)
@@ -23,50 +35,93 @@ def test_mirrored_value_maps_are_the_true_ones(axis):
 
 
 def test_direction_words_swap_with_the_flip():
-    assert swap_words("Two cells left of the westernmost rock.", SWAP_LEFT_RIGHT) == \
-        "two cells right of the easternmost rock"
-    assert swap_words("reach the cell above the top-most tree", SWAP_UP_DOWN) == \
-        "reach the cell below the bottom most tree"
-    assert swap_words("one bellow the northern house", SWAP_UP_DOWN) == \
-        "one above the southern house"
+    assert (
+        swap_words('Two cells left of the westernmost rock.', SWAP_LEFT_RIGHT)
+        == 'two cells right of the easternmost rock'
+    )
+    assert (
+        swap_words('reach the cell above the top-most tree', SWAP_UP_DOWN)
+        == 'reach the cell below the bottom most tree'
+    )
+    assert (
+        swap_words('one bellow the northern house', SWAP_UP_DOWN) == 'one above the southern house'
+    )
     # words without a direction are untouched
-    assert swap_words("reach the heart", SWAP_UP_DOWN) == "reach the heart"
+    assert swap_words('reach the heart', SWAP_UP_DOWN) == 'reach the heart'
 
 
 def test_with_mirrors_is_four_times_the_data():
-    data = generator.generate(5, seed=1, mode="local")
+    data = generator.generate(5, seed=1, mode='local')
     out = with_mirrors(data)
     assert len(out) == 20
     assert out.grids.shape == (20, *data.grids.shape[1:])
-    with pytest.raises(ValueError, match="mirror axis"):
+    with pytest.raises(ValueError, match='mirror axis'):
         mirror(data, 0)
 
 
-@pytest.mark.parametrize("tasks,min_count", [(("pw-local", "pw-global"), 1), (("isi",), 2)])
+@pytest.mark.parametrize('tasks,min_count', [(('pw-local', 'pw-global'), 1), (('isi',), 2)])
 def test_every_direction_word_in_train_has_a_mirror(data_dir, tasks, min_count):
     """A direction word the tables miss would mislabel its mirrored examples."""
-    counts = Counter(w for task in tasks
-                     for text in datasets.load_task(task, "train", data_dir).instructions
-                     for w in tokenize(text))
+    counts = Counter(
+        w
+        for task in tasks
+        for text in datasets.load_task(task, 'train', data_dir).instructions
+        for w in tokenize(text)
+    )
     words = {w for w, n in counts.items() if n >= min_count}
     # words that only contain a direction's letters; "ups" is ISI's UPS logo block
-    horizontal = [w for w in words - {"lowest", "least"}
-                  if any(r in w for r in ("left", "right", "east", "west"))]
-    vertical = [w for w in words - {"highlighting", "yellow", "stop", "stopping", "ups", "ups's",
-                                    "overlap"}
-                if any(r in w for r in ("above", "below", "bellow", "north", "south", "top",
-                                        "bottom", "upper", "lower", "under", "beneath", "up",
-                                        "down", "high", "low", "over"))]
+    horizontal = [
+        w
+        for w in words - {'lowest', 'least'}
+        if any(r in w for r in ('left', 'right', 'east', 'west'))
+    ]
+    vertical = [
+        w
+        for w in words - {'highlighting', 'yellow', 'stop', 'stopping', 'ups', "ups's", 'overlap'}
+        if any(
+            r in w
+            for r in (
+                'above',
+                'below',
+                'bellow',
+                'north',
+                'south',
+                'top',
+                'bottom',
+                'upper',
+                'lower',
+                'under',
+                'beneath',
+                'up',
+                'down',
+                'high',
+                'low',
+                'over',
+            )
+        )
+    ]
     assert not [w for w in horizontal if w not in SWAP_LEFT_RIGHT]
     assert not [w for w in vertical if w not in SWAP_UP_DOWN]
 
 
 def test_direction_words_that_are_not_directions_stay():
     """ISI blocks are picked up, lined up and put right next to one another: no flip moves that."""
-    assert swap_words("Pick up block 3 and put it right next to the right side of block 4",
-                      SWAP_LEFT_RIGHT) == "pick up block 3 and put it right next to the left side of block 4"
-    assert swap_words("move it up until it is lined up with block 2", SWAP_UP_DOWN) == \
-        "move it down until it is lined up with block 2"
-    assert swap_words("put it right on top of block 5", SWAP_LEFT_RIGHT) == "put it right on top of block 5"
+    assert (
+        swap_words(
+            'Pick up block 3 and put it right next to the right side of block 4', SWAP_LEFT_RIGHT
+        )
+        == 'pick up block 3 and put it right next to the left side of block 4'
+    )
+    assert (
+        swap_words('move it up until it is lined up with block 2', SWAP_UP_DOWN)
+        == 'move it down until it is lined up with block 2'
+    )
+    assert (
+        swap_words('put it right on top of block 5', SWAP_LEFT_RIGHT)
+        == 'put it right on top of block 5'
+    )
     # "right" before a direction is itself a direction ("one to the right below the tree")
-    assert swap_words("one to the right below the tree", SWAP_LEFT_RIGHT) == "one to the left below the tree"
+    assert (
+        swap_words('one to the right below the tree', SWAP_LEFT_RIGHT)
+        == 'one to the left below the tree'
+    )

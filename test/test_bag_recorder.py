@@ -1,4 +1,11 @@
-"""The bag recorder over real DDS writes what `ros2 bag record -s mcap` of Jazzy writes.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The bag recorder over real DDS writes what `ros2 bag record -s mcap` of Jazzy writes.
 
 - Latched topics are subscribed transient local (a map latched before recording started is
   in the bag); the bytes stored are the CDR the publisher sent.
@@ -8,6 +15,7 @@
 - log_time is the reception time, even when the recorder's thread is busy when the message
   arrives, and publish_time the publisher's send time.
 """
+
 import threading
 import time
 
@@ -20,49 +28,62 @@ make_reader = pytest.importorskip(
     'mcap.reader', reason='the mcap reader is not installed (pip install mcap, requirements.txt)'
 ).make_reader
 
-from grounder_helpers import unique_namespace  # noqa: E402
+from grounder_helpers import unique_namespace  # noqa: E402, I100
 from nav_msgs.msg import OccupancyGrid  # noqa: E402
 from rclpy.duration import Duration  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
-from std_msgs.msg import Header, String  # noqa: E402
-
 from spatial_grounding_ros.bags import open_bag, typestore  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.bag_recorder import BagRecorder, LATCHED_QOS  # noqa: E402
+from std_msgs.msg import Header, String  # noqa: E402
 
 INFINITE = {'sec': 9223372036, 'nsec': 854775807}  # RMW_DURATION_INFINITE
 
 
 def topic_metadata(bag) -> dict:
     info = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
-    return info, {t['topic_metadata']['name']: t['topic_metadata']
-                  for t in info['topics_with_message_count']}
+    return info, {
+        t['topic_metadata']['name']: t['topic_metadata'] for t in info['topics_with_message_count']
+    }
 
 
-def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(ros_context,
-                                                                              tmp_path):
+def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(
+    ros_context, tmp_path
+):
     graph = ros_context
     namespace = unique_namespace('recorder_test')
     source = graph.add(Node('source', namespace=namespace, context=graph.context))
     map_pub = source.create_publisher(OccupancyGrid, 'entity_map', LATCHED_QOS)
     # latched like the gridworld's instruction, with a deadline: the recorder subscribes
     # volatile, so only the publisher's own QoS can put transient_local and 5 s in the bag
-    text_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                          deadline=Duration(seconds=5))
+    text_qos = QoSProfile(
+        depth=1,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        deadline=Duration(seconds=5),
+    )
     text_pub = source.create_publisher(String, 'instruction', text_qos)
     second_text_pub = source.create_publisher(String, 'instruction', 10)  # a 2nd publisher
     grid = convert.grid_to_occupancy_grid(np.arange(12).reshape(3, 4), Header(frame_id='map'))
     map_pub.publish(grid)  # latched before the recorder exists
-    recorder = graph.add(BagRecorder(tmp_path / 'bag', {
-        'entity_map': 'nav_msgs/msg/OccupancyGrid', 'instruction': 'std_msgs/msg/String'},
-        latched={'entity_map'}, namespace=namespace, context=graph.context))
-    assert graph.wait_for(lambda: recorder.counts.get(f'{namespace}/entity_map') == 1,
-                          timeout=20)
-    assert graph.wait_for(lambda: text_pub.get_subscription_count() > 0
-                          and second_text_pub.get_subscription_count() > 0, timeout=20)
+    recorder = graph.add(
+        BagRecorder(
+            tmp_path / 'bag',
+            {'entity_map': 'nav_msgs/msg/OccupancyGrid', 'instruction': 'std_msgs/msg/String'},
+            latched={'entity_map'},
+            namespace=namespace,
+            context=graph.context,
+        )
+    )
+    assert graph.wait_for(lambda: recorder.counts.get(f'{namespace}/entity_map') == 1, timeout=20)
+    assert graph.wait_for(
+        lambda: (
+            text_pub.get_subscription_count() > 0 and second_text_pub.get_subscription_count() > 0
+        ),
+        timeout=20,
+    )
     text_pub.publish(String(data='reach cell on top of star'))
     assert graph.wait_for(lambda: recorder.counts.get(f'{namespace}/instruction') == 1)
     graph.executor.remove_node(recorder)  # nothing arrives while the bag closes
@@ -73,17 +94,27 @@ def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(ros
     assert info['ros_distro'] == 'jazzy'
     [latched] = topics[f'{namespace}/entity_map']['offered_qos_profiles']
     # history and depth are not discovered: ros2 bag record stores 'unknown' and 0 too
-    assert latched == {'history': 'unknown', 'depth': 0, 'reliability': 'reliable',
-                       'durability': 'transient_local', 'deadline': INFINITE,
-                       'lifespan': INFINITE, 'liveliness': 'automatic',
-                       'liveliness_lease_duration': INFINITE,
-                       'avoid_ros_namespace_conventions': False}
+    assert latched == {
+        'history': 'unknown',
+        'depth': 0,
+        'reliability': 'reliable',
+        'durability': 'transient_local',
+        'deadline': INFINITE,
+        'lifespan': INFINITE,
+        'liveliness': 'automatic',
+        'liveliness_lease_duration': INFINITE,
+        'avoid_ros_namespace_conventions': False,
+    }
     offered = topics[f'{namespace}/instruction']['offered_qos_profiles']
     assert sorted((q['durability'], q['deadline']['sec']) for q in offered) == [
-        ('transient_local', 5), ('volatile', INFINITE['sec'])]
+        ('transient_local', 5),
+        ('volatile', INFINITE['sec']),
+    ]
     store = typestore()
-    for name, msgtype in ((f'{namespace}/entity_map', 'nav_msgs/msg/OccupancyGrid'),
-                          (f'{namespace}/instruction', 'std_msgs/msg/String')):
+    for name, msgtype in (
+        (f'{namespace}/entity_map', 'nav_msgs/msg/OccupancyGrid'),
+        (f'{namespace}/instruction', 'std_msgs/msg/String'),
+    ):
         advertised = str(source.get_publishers_info_by_topic(name)[0].topic_type_hash)
         assert advertised.startswith('RIHS01_') and len(advertised) == 7 + 64
         assert topics[name]['type_description_hash'] == advertised
@@ -95,13 +126,16 @@ def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(ros
         reader = make_reader(stream)
         assert reader.get_header().profile == 'ros2'
         channels = {c.topic: c for c in reader.get_summary().channels.values()}
-        messages = {c.topic: (m.log_time, m.publish_time, m.data)
-                    for _, c, m in reader.iter_messages()}
+        messages = {
+            c.topic: (m.log_time, m.publish_time, m.data) for _, c, m in reader.iter_messages()
+        }
         [metadata] = [m for m in reader.iter_metadata() if m.name == 'rosbag2']
     for name, meta in topics.items():
         assert channels[name].metadata['topic_type_hash'] == meta['type_description_hash']
-        assert yaml.safe_load(channels[name].metadata['offered_qos_profiles']) == \
-            meta['offered_qos_profiles']
+        assert (
+            yaml.safe_load(channels[name].metadata['offered_qos_profiles'])
+            == meta['offered_qos_profiles']
+        )
     assert yaml.safe_load(metadata.metadata['serialized_metadata'])['ros_distro'] == 'jazzy'
     assert messages[f'{namespace}/entity_map'][2] == serialize_message(grid)
     log_time, publish_time, data = messages[f'{namespace}/instruction']
@@ -115,16 +149,25 @@ def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(ros
         reader.close()
 
 
-def test_log_time_is_reception_not_when_a_busy_thread_gets_to_the_callback(ros_context,
-                                                                           tmp_path):
-    """The recorder's executor thread is kept busy for 1.5 s while a message arrives (as
-    the demo's thread was while drawing a PNG): its log_time is still when it arrived."""
+def test_log_time_is_reception_not_when_a_busy_thread_gets_to_the_callback(ros_context, tmp_path):
+    """
+    Check that a message's log time is its reception, not when a busy thread gets to it.
+
+    The recorder's executor thread is kept busy for 1.5 s while a message arrives (as
+    the demo's thread was while drawing a PNG): its log_time is still when it arrived.
+    """
     graph = ros_context
     namespace = unique_namespace('recorder_busy_test')
     source = graph.add(Node('source', namespace=namespace, context=graph.context))
     pub = source.create_publisher(String, 'agent_pose_like', 10)
-    recorder = graph.add(BagRecorder(tmp_path / 'bag', {'agent_pose_like': 'std_msgs/msg/String'},
-                                     namespace=namespace, context=graph.context))
+    recorder = graph.add(
+        BagRecorder(
+            tmp_path / 'bag',
+            {'agent_pose_like': 'std_msgs/msg/String'},
+            namespace=namespace,
+            context=graph.context,
+        )
+    )
     assert graph.wait_for(lambda: pub.get_subscription_count() > 0, timeout=20)
     busy = threading.Event()
 

@@ -1,9 +1,19 @@
-"""What the shipped default model answers: clear instructions on hand-made and generated
-worlds land on the cell they name. These fail, not skip, when a model regresses: the
-thresholds sit a little under what the shipped `pw_t-rnet-attn` does (README, suite table)."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+What the shipped default model answers.
+
+Clear instructions on hand-made and generated worlds land on the cell they name. These fail, not
+skip, when a model regresses: the thresholds sit a little under what the shipped `pw_t-rnet-attn`
+does (README, suite table).
+"""
+
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import suite
 from spatial_grounding_ros.entities import PUDDLEWORLD
 from spatial_grounding_ros.generator import GLOBAL_FAMILIES, LOCAL_FAMILIES
@@ -12,7 +22,7 @@ from spatial_grounding_ros.grounder import Grounder
 E = PUDDLEWORLD.index
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def grounder():
     return Grounder.from_checkpoint()  # the node's default, pw_t-rnet-attn
 
@@ -20,37 +30,44 @@ def grounder():
 def hand_made(size):
     """Grass, one puddle, a star, a circle, rocks and trees: every answer below is unique."""
     grid = np.zeros((size, size), dtype=np.int64)
-    grid[1:3, size - 4:size - 2] = E("puddle")
-    grid[3, 4] = E("star")
-    grid[6, 2] = E("circle")
+    grid[1:3, size - 4:size - 2] = E('puddle')
+    grid[3, 4] = E('star')
+    grid[6, 2] = E('circle')
     for cell in [(0, 5), (size - 2, 6), (5, 0), (4, size - 3)]:  # north, south, west, east
-        grid[cell] = E("rock")
-    grid[8, 8] = grid[0, 6] = E("tree")
+        grid[cell] = E('rock')
+    grid[8, 8] = grid[0, 6] = E('tree')
     return grid
 
 
-@pytest.mark.parametrize("size", [10, 32])
-@pytest.mark.parametrize("text,goal", [
-    ("reach cell two below star", (5, 4)),
-    ("reach cell two above star", (1, 4)),
-    ("reach cell two to the left of star", (3, 2)),
-    ("reach cell to right of circle", (6, 3)),
-    ("reach cell on top of circle", (5, 2)),
-    ("reach cell to bottom left of star", (4, 3)),
-    ("reach cell one to the left and two below star", (5, 3)),
-    ("reach cell with circle", (6, 2)),
-])
+@pytest.mark.parametrize('size', [10, 32])
+@pytest.mark.parametrize(
+    'text,goal',
+    [
+        ('reach cell two below star', (5, 4)),
+        ('reach cell two above star', (1, 4)),
+        ('reach cell two to the left of star', (3, 2)),
+        ('reach cell to right of circle', (6, 3)),
+        ('reach cell on top of circle', (5, 2)),
+        ('reach cell to bottom left of star', (4, 3)),
+        ('reach cell one to the left and two below star', (5, 3)),
+        ('reach cell with circle', (6, 2)),
+    ],
+)
 def test_offsets_from_a_unique_object(grounder, size, text, goal):
     assert grounder.ground(hand_made(size), text).goal == goal
 
 
-@pytest.mark.parametrize("size", [10, 32])
+@pytest.mark.parametrize('size', [10, 32])
 def test_the_four_extremes_pick_the_right_rock(grounder, size):
     grid = hand_made(size)
-    answers = {"northernmost": (0, 5), "southernmost": (size - 2, 6),
-               "westernmost": (5, 0), "easternmost": (4, size - 3)}
+    answers = {
+        'northernmost': (0, 5),
+        'southernmost': (size - 2, 6),
+        'westernmost': (5, 0),
+        'easternmost': (4, size - 3),
+    }
     for word, cell in answers.items():
-        assert grounder.ground(grid, f"reach {word} rock").goal == cell, word
+        assert grounder.ground(grid, f'reach {word} rock').goal == cell, word
 
 
 # Minimum exact-goal rate per family on 30 fresh generated 10x10 worlds each (the suite's
@@ -58,11 +75,16 @@ def test_the_four_extremes_pick_the_right_rock(grounder, size):
 # local family, extreme and between, 0.97 on combined and extreme-offset, 0.93 on closest
 # and 0.80 on row-col (its weakest, README); the floors leave room for a few argmax flips
 # on another CPU and fail a model that regresses (the previous default: 0.0 to 0.37).
-FLOOR = {**{f: 0.9 for f in LOCAL_FAMILIES}, **{f: 0.85 for f in GLOBAL_FAMILIES},
-         "extreme-offset": 0.85, "row-col": 0.7, "between": 0.9}
+FLOOR = {
+    **{f: 0.9 for f in LOCAL_FAMILIES},
+    **{f: 0.85 for f in GLOBAL_FAMILIES},
+    'extreme-offset': 0.85,
+    'row-col': 0.7,
+    'between': 0.9,
+}
 
 
 def test_every_family_hits_on_generated_worlds():
-    result = suite.run_suite("pw_t-rnet-attn", sizes=(10,), n=30, seed=123, progress=False)
-    low = {f: v["10"]["hit"] for f, v in result["families"].items() if v["10"]["hit"] < FLOOR[f]}
-    assert not low, f"families under their floor: {low}"
+    result = suite.run_suite('pw_t-rnet-attn', sizes=(10,), n=30, seed=123, progress=False)
+    low = {f: v['10']['hit'] for f, v in result['families'].items() if v['10']['hit'] < FLOOR[f]}
+    assert not low, f'families under their floor: {low}'

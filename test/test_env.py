@@ -1,24 +1,34 @@
-"""The RL environment: rewards and termination come from the example's maps, moves from
-world.step_cell, and the true values never reach the observation."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The RL environment.
+
+Rewards and termination come from the example's maps, moves from world.step_cell, and the true
+values never reach the observation.
+"""
+
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import world
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope='module')
 def data():
-    return generate(20, seed=3, mode="mixed")
+    return generate(20, seed=3, mode='mixed')
 
 
 def test_reset_observation_has_no_values(data):
     env = GridWorldEnv(data)
     obs, info = env.reset(seed=0)
-    assert set(obs) == {"grid", "instruction", "agent"}
-    assert obs["grid"].shape == (10, 10) and isinstance(obs["instruction"], str)
-    assert not data.terminal[info["example"]][obs["agent"]]  # never starts on the goal
+    assert set(obs) == {'grid', 'instruction', 'agent'}
+    assert obs['grid'].shape == (10, 10) and isinstance(obs['instruction'], str)
+    assert not data.terminal[info['example']][obs['agent']]  # never starts on the goal
 
 
 def test_walk_to_goal_collects_rewards_and_terminates(data):
@@ -31,13 +41,13 @@ def test_walk_to_goal_collects_rewards_and_terminates(data):
         a = int(policy[env.agent])
         nxt = world.step_cell(env.agent, a, env.shape)
         obs, reward, terminated, truncated, info = env.step(a)
-        assert obs["agent"] == nxt
+        assert obs['agent'] == nxt
         assert reward == data.rewards[4][nxt]
         expected += reward
         if terminated:
             break
     assert terminated and not truncated and env.agent == goal
-    assert info["total_reward"] == pytest.approx(expected)
+    assert info['total_reward'] == pytest.approx(expected)
     assert data.rewards[4][goal] >= 2.0
     with pytest.raises(RuntimeError):
         env.step(0)
@@ -47,10 +57,10 @@ def test_off_map_stays_put_and_step_limit_truncates(data):
     env = GridWorldEnv(data, step_limit=3)
     env.reset(example=0, start=(0, 0))
     if env.goal == (0, 0):
-        pytest.skip("goal in the corner")
+        pytest.skip('goal in the corner')
     for i in range(3):
         obs, reward, terminated, truncated, _ = env.step(0)  # up, off the map
-        assert obs["agent"] == (0, 0)
+        assert obs['agent'] == (0, 0)
         assert reward == data.rewards[0][0, 0]
     assert truncated and not terminated
 
@@ -60,7 +70,7 @@ def test_puddle_reward_is_minus_one(data):
     i = next(i for i in range(len(data)) if (data.grids[i] == 1).any())
     cell = tuple(np.argwhere(data.grids[i] == 1)[0])
     if data.terminal[i][cell]:
-        pytest.skip("puddle is the goal")
+        pytest.skip('puddle is the goal')
     # enter the puddle cell from a neighbour
     for a, (dr, dc) in enumerate(world.ACTIONS):
         start = (cell[0] - dr, cell[1] - dc)
@@ -69,7 +79,7 @@ def test_puddle_reward_is_minus_one(data):
             _, reward, _, _, _ = env.step(a)
             assert reward == -1.0
             return
-    pytest.skip("no free neighbour")
+    pytest.skip('no free neighbour')
 
 
 def test_bad_input(data):
@@ -88,20 +98,26 @@ def test_bad_input(data):
 
 
 def test_sequential_order_and_generator_source():
-    data = load_episodes("generator-local", n=3, seed=1)
-    env = GridWorldEnv(data, order="sequential")
-    seen = [env.reset()[1]["example"] for _ in range(4)]
+    data = load_episodes('generator-local', n=3, seed=1)
+    env = GridWorldEnv(data, order='sequential')
+    seen = [env.reset()[1]['example'] for _ in range(4)]
     assert seen == [0, 1, 2, 0]
 
 
 def test_puddleworld_episodes(data_dir):
-    """Episodes of a data set split (read from SPATIAL_GROUNDING_DATA or ../shared/data, the
-    data_dir fixture): the example's own map, instruction and rewards."""
-    data = load_episodes("pw-local", "test", str(data_dir))
+    """
+    Check the episodes of a data set split.
+
+    Episodes of a data set split (read from SPATIAL_GROUNDING_DATA or ../shared/data, the
+    data_dir fixture): the example's own map, instruction and rewards.
+    """
+    data = load_episodes('pw-local', 'test', str(data_dir))
     assert len(data) == 399
     env = GridWorldEnv(data)
     obs, info = env.reset(seed=0)
-    i = info["example"]
-    assert obs["instruction"] == data.instructions[i] and np.array_equal(obs["grid"], data.grids[i])
+    i = info['example']
+    assert obs['instruction'] == data.instructions[i] and np.array_equal(
+        obs['grid'], data.grids[i]
+    )
     _, reward, _, _, _ = env.step(3)
     assert reward == data.rewards[i][env.agent]

@@ -1,20 +1,42 @@
-"""The generator: every relation family at any size >= 5, in Janner et al.'s phrasing, with
-the goal an independent reading of the instruction gives."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The generator.
+
+Every relation family at any size >= 5, in Janner et al.'s phrasing, with the goal an independent
+reading of the instruction gives.
+"""
+
 import pickle
 import re
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import generator, world
 from spatial_grounding_ros.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
-OBJ = "|".join(PUDDLEWORLD.names[2:])
-NUM = {"one": 1, "two": 2}
-EXT = {"northernmost": (0, -1), "southernmost": (0, 1), "westernmost": (1, -1), "easternmost": (1, 1)}
-ONE_STEP = {"to left of": (0, -1), "to right of": (0, 1), "on top of": (-1, 0), "on bottom of": (1, 0),
-            "to top left of": (-1, -1), "to top right of": (-1, 1), "to bottom left of": (1, -1),
-            "to bottom right of": (1, 1)}
+OBJ = '|'.join(PUDDLEWORLD.names[2:])
+NUM = {'one': 1, 'two': 2}
+EXT = {
+    'northernmost': (0, -1),
+    'southernmost': (0, 1),
+    'westernmost': (1, -1),
+    'easternmost': (1, 1),
+}
+ONE_STEP = {
+    'to left of': (0, -1),
+    'to right of': (0, 1),
+    'on top of': (-1, 0),
+    'on bottom of': (1, 0),
+    'to top left of': (-1, -1),
+    'to top right of': (-1, 1),
+    'to bottom left of': (1, -1),
+    'to bottom right of': (1, 1),
+}
 
 
 def cells(grid, name):
@@ -23,77 +45,93 @@ def cells(grid, name):
 
 def only(grid, name):
     found = cells(grid, name)
-    assert len(found) == 1, f"{name} occurs {len(found)} times"
+    assert len(found) == 1, f'{name} occurs {len(found)} times'
     return found[0]
 
 
 def vertical(word, n):
-    return NUM[n] * (-1 if word == "above" else 1)
+    return NUM[n] * (-1 if word == 'above' else 1)
 
 
 def horizontal(word, n):
-    return NUM[n] * (-1 if word == "left" else 1)
+    return NUM[n] * (-1 if word == 'left' else 1)
 
 
 def answer(grid, text):
-    """The cell an instruction names, read independently of the generator's code."""
-    if m := re.fullmatch(rf"reach cell with ({OBJ})", text):
+    """Return the cell an instruction names, read independently of the generator's code."""
+    if m := re.fullmatch(rf'reach cell with ({OBJ})', text):
         return only(grid, m[1])
-    if m := re.fullmatch(rf"reach cell ({'|'.join(ONE_STEP)}) ({OBJ})", text):
+    if m := re.fullmatch(rf'reach cell ({"|".join(ONE_STEP)}) ({OBJ})', text):
         r, c = only(grid, m[2])
         dr, dc = ONE_STEP[m[1]]
         return r + dr, c + dc
-    if m := re.fullmatch(rf"reach cell two (above|below) ({OBJ})", text):
+    if m := re.fullmatch(rf'reach cell two (above|below) ({OBJ})', text):
         r, c = only(grid, m[2])
-        return r + vertical(m[1], "two"), c
-    if m := re.fullmatch(rf"reach cell two to the (left|right) of ({OBJ})", text):
+        return r + vertical(m[1], 'two'), c
+    if m := re.fullmatch(rf'reach cell two to the (left|right) of ({OBJ})', text):
         r, c = only(grid, m[2])
-        return r, c + horizontal(m[1], "two")
-    if m := re.fullmatch(rf"reach cell (one|two) to the (left|right) and (one|two) (above|below) ({OBJ})", text):
+        return r, c + horizontal(m[1], 'two')
+    if m := re.fullmatch(
+        rf'reach cell (one|two) to the (left|right) and (one|two) (above|below) ({OBJ})', text
+    ):
         r, c = only(grid, m[5])
         return r + vertical(m[4], m[3]), c + horizontal(m[2], m[1])
-    if m := re.fullmatch(rf"reach (?:the cell (above|below|to the left of|to the right of) the )?"
-                         rf"(northernmost|southernmost|westernmost|easternmost) ({OBJ})", text):
+    if m := re.fullmatch(
+        rf'reach (?:the cell (above|below|to the left of|to the right of) the )?'
+        rf'(northernmost|southernmost|westernmost|easternmost) ({OBJ})',
+        text,
+    ):
         axis, sign = EXT[m[2]]
         found = cells(grid, m[3])
         keys = [sign * cell[axis] for cell in found]
-        assert keys.count(max(keys)) == 1, f"{text}: the extreme is not unique"
+        assert keys.count(max(keys)) == 1, f'{text}: the extreme is not unique'
         r, c = found[int(np.argmax(keys))]
-        side = {"above": (-1, 0), "below": (1, 0), "to the left of": (0, -1),
-                "to the right of": (0, 1), None: (0, 0)}[m[1]]
+        side = {
+            'above': (-1, 0),
+            'below': (1, 0),
+            'to the left of': (0, -1),
+            'to the right of': (0, 1),
+            None: (0, 0),
+        }[m[1]]
         return r + side[0], c + side[1]
-    if m := re.fullmatch(rf"reach ({OBJ}) closest to ({OBJ})", text):
+    if m := re.fullmatch(rf'reach ({OBJ}) closest to ({OBJ})', text):
         anchor = np.array(only(grid, m[2]))
         found = cells(grid, m[1])
         dist = [float(np.hypot(*(np.array(cell) - anchor))) for cell in found]
-        assert dist.count(min(dist)) == 1, f"{text}: the closest is not unique"
+        assert dist.count(min(dist)) == 1, f'{text}: the closest is not unique'
         return found[int(np.argmin(dist))]
-    if m := re.fullmatch(rf"reach (cell|{OBJ}) (one|two) (above|below) ({OBJ}) and (one|two) "
-                         rf"to the (left|right) of ({OBJ})", text):
-        goal = (only(grid, m[4])[0] + vertical(m[3], m[2]), only(grid, m[7])[1] + horizontal(m[6], m[5]))
-        if m[1] != "cell":
+    if m := re.fullmatch(
+        rf'reach (cell|{OBJ}) (one|two) (above|below) ({OBJ}) and (one|two) '
+        rf'to the (left|right) of ({OBJ})',
+        text,
+    ):
+        goal = (
+            only(grid, m[4])[0] + vertical(m[3], m[2]),
+            only(grid, m[7])[1] + horizontal(m[6], m[5]),
+        )
+        if m[1] != 'cell':
             assert PUDDLEWORLD.names[grid[goal]] == m[1], text
         return goal
-    if m := re.fullmatch(rf"reach (cell|{OBJ}) between ({OBJ}) and ({OBJ})", text):
+    if m := re.fullmatch(rf'reach (cell|{OBJ}) between ({OBJ}) and ({OBJ})', text):
         a, b = np.array(only(grid, m[2])), np.array(only(grid, m[3]))
-        assert sorted(np.abs(a - b)) == [0, 2], f"{text}: not two apart in a line"
+        assert sorted(np.abs(a - b)) == [0, 2], f'{text}: not two apart in a line'
         goal = tuple(int(x) for x in (a + b) // 2)
-        if m[1] != "cell":
+        if m[1] != 'cell':
             assert PUDDLEWORLD.names[grid[goal]] == m[1], text
         return goal
-    raise AssertionError(f"instruction outside the grammar: {text!r}")
+    raise AssertionError(f'instruction outside the grammar: {text!r}')
 
 
-@pytest.mark.parametrize("size", [5, 10, 33])
+@pytest.mark.parametrize('size', [5, 10, 33])
 def test_every_family_names_the_goal_an_independent_reading_gives(size):
-    data = generator.generate(9 * 12, seed=size, mode="mixed", size=size)
+    data = generator.generate(9 * 12, seed=size, mode='mixed', size=size)
     families = [generator.family_of(w) for w in data.worlds]
     assert {f: families.count(f) for f in set(families)} == {f: 12 for f in generator.FAMILIES}
     for grid, text, goal in zip(data.grids, data.instructions, data.goals):
         assert answer(grid, text) == tuple(goal), text
         assert grid.shape == (size, size) and 0 <= goal[0] < size and 0 <= goal[1] < size
     np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
-    again = generator.generate(9 * 12, seed=size, mode="mixed", size=size)
+    again = generator.generate(9 * 12, seed=size, mode='mixed', size=size)
     assert again.instructions == data.instructions
 
 
@@ -104,56 +142,65 @@ def test_unique_objects_occur_once_and_objects_scale_with_area():
         grids = [generator.random_grid(rng, size) for _ in range(20)]
         for grid in grids:
             assert all(len(cells(grid, u)) <= 1 for u in PUDDLEWORLD_UNIQUE)
-        counts[size] = np.mean([np.isin(grid, [PUDDLEWORLD.index(n) for n in PUDDLEWORLD_NONUNIQUE]).sum()
-                                for grid in grids])
+        counts[size] = np.mean(
+            [
+                np.isin(grid, [PUDDLEWORLD.index(n) for n in PUDDLEWORLD_NONUNIQUE]).sum()
+                for grid in grids
+            ]
+        )
     assert counts[10] == 8
     assert counts[64] / counts[10] == pytest.approx(64 * 64 / 100, rel=0.05)
 
 
 def test_directions_follow_row0_is_north():
     grid = np.zeros((10, 10), dtype=np.int64)
-    grid[5, 5] = PUDDLEWORLD.index("star")
+    grid[5, 5] = PUDDLEWORLD.index('star')
     goals = dict(generator.local_goals(grid))
-    assert goals["reach cell on top of star"] == (4, 5)
-    assert goals["reach cell two below star"] == (7, 5)
-    assert goals["reach cell two to the right of star"] == (5, 7)
-    assert goals["reach cell one to the left and two below star"] == (7, 4)
-    grid[2, 1] = grid[8, 3] = PUDDLEWORLD.index("rock")
+    assert goals['reach cell on top of star'] == (4, 5)
+    assert goals['reach cell two below star'] == (7, 5)
+    assert goals['reach cell two to the right of star'] == (5, 7)
+    assert goals['reach cell one to the left and two below star'] == (7, 4)
+    grid[2, 1] = grid[8, 3] = PUDDLEWORLD.index('rock')
     goals = dict(generator.global_goals(grid))
-    assert goals["reach northernmost rock"] == (2, 1)
-    assert goals["reach easternmost rock"] == (8, 3)
-    assert goals["reach rock closest to star"] == (8, 3)  # (3, 2) away, against (3, 4)
-    offsets = dict(generator.family_goals(grid, "extreme-offset"))
-    assert offsets["reach the cell above the northernmost rock"] == (1, 1)
-    assert offsets["reach the cell to the left of the southernmost rock"] == (8, 2)
+    assert goals['reach northernmost rock'] == (2, 1)
+    assert goals['reach easternmost rock'] == (8, 3)
+    assert goals['reach rock closest to star'] == (8, 3)  # (3, 2) away, against (3, 4)
+    offsets = dict(generator.family_goals(grid, 'extreme-offset'))
+    assert offsets['reach the cell above the northernmost rock'] == (1, 1)
+    assert offsets['reach the cell to the left of the southernmost rock'] == (8, 2)
 
 
 def test_unknown_family_size_and_mode_are_clear_errors():
     with pytest.raises(ValueError, match="unknown family 'nearby'"):
-        generator.generate(3, families=("nearby",))
-    with pytest.raises(ValueError, match="size >= 5"):
+        generator.generate(3, families=('nearby',))
+    with pytest.raises(ValueError, match='size >= 5'):
         generator.generate(3, size=4)
-    with pytest.raises(ValueError, match="unknown generator mode"):
-        generator.generate(3, mode="far")
+    with pytest.raises(ValueError, match='unknown generator mode'):
+        generator.generate(3, mode='far')
 
 
 def test_phrasing_is_janners_word_for_word(data_dir):
-    """Every generated template (object names and numbers abstracted) occurs among the world
-    pickles' own synthetic instructions, and every family is covered by them."""
+    """
+    Check that every generated template occurs among the world pickles' instructions.
+
+    Every generated template (object names and numbers abstracted) occurs among the world
+    pickles' own synthetic instructions, and every family is covered by them.
+    """
+
     def template(text):
-        text = re.sub(rf"\b({'|'.join(PUDDLEWORLD_UNIQUE)})\b", "U", text)
-        text = re.sub(rf"\b({'|'.join(PUDDLEWORLD_NONUNIQUE)})\b", "N", text)
-        text = re.sub(r"\b(northernmost|southernmost|westernmost|easternmost)\b", "EXT", text)
-        text = re.sub(r"\b(one|two)\b", "K", text)
-        text = re.sub(r"\b(left|right)\b", "LR", text)
-        text = re.sub(r"\b(above|below)\b", "AB", text)
-        return re.sub(r"\b(top|bottom)\b", "TB", text)
+        text = re.sub(rf'\b({"|".join(PUDDLEWORLD_UNIQUE)})\b', 'U', text)
+        text = re.sub(rf'\b({"|".join(PUDDLEWORLD_NONUNIQUE)})\b', 'N', text)
+        text = re.sub(r'\b(northernmost|southernmost|westernmost|easternmost)\b', 'EXT', text)
+        text = re.sub(r'\b(one|two)\b', 'K', text)
+        text = re.sub(r'\b(left|right)\b', 'LR', text)
+        text = re.sub(r'\b(above|below)\b', 'AB', text)
+        return re.sub(r'\b(top|bottom)\b', 'TB', text)
 
     janner = set()
-    for mode in ("local", "global"):
-        for path in sorted((data_dir / "puddleworld" / mode).glob("*.p")):
-            with open(path, "rb") as f:
-                janner |= {template(t) for t in pickle.load(f, encoding="latin1")["instructions"]}
-    data = generator.generate(9 * 30, seed=1, mode="mixed", size=12)
+    for mode in ('local', 'global'):
+        for path in sorted((data_dir / 'puddleworld' / mode).glob('*.p')):
+            with open(path, 'rb') as f:
+                janner |= {template(t) for t in pickle.load(f, encoding='latin1')['instructions']}
+    data = generator.generate(9 * 30, seed=1, mode='mixed', size=12)
     ours = {template(t) for t in data.instructions}
     assert ours <= janner, sorted(ours - janner)

@@ -1,25 +1,35 @@
-"""The gridworld node over real DDS: it publishes an episode (map in the OccupancyGrid
-orientation, instruction, truth), moves on actions, walks to a goal_pose, and answers bad
-input with a warning diagnostic while it keeps serving. Plus the closed-loop demo."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The gridworld node over real DDS.
+
+It publishes an episode (map in the OccupancyGrid orientation, instruction, truth), moves on
+actions, walks to a goal_pose, and answers bad input with a warning diagnostic while it keeps
+serving. Plus the closed-loop demo.
+"""
+
 import os
 import secrets
 import time
 
-import numpy as np
-import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import numpy as np
+import pytest
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from std_msgs.msg import Bool, Float32, Float32MultiArray, Int32, String
-from std_srvs.srv import Trigger
-
 from spatial_grounding_ros import world
 from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.ros import convert
-from spatial_grounding_ros.ros.gridworld_node import LATCHED, STEPS, GridWorldNode
+from spatial_grounding_ros.ros.gridworld_node import GridWorldNode, LATCHED, STEPS
+from std_msgs.msg import Bool, Float32, Float32MultiArray, Int32, String
+from std_srvs.srv import Trigger
 
 
 @pytest.fixture
@@ -49,8 +59,19 @@ NAMESPACE = f'/gw_test_{os.getpid()}_{secrets.token_hex(3)}'
 class Probe(rclpy.node.Node):
     def __init__(self, context):
         super().__init__('probe', namespace=NAMESPACE, context=context)
-        self.got = {k: [] for k in ('map', 'instruction', 'pose', 'reward', 'terminated',
-                                    'goal', 'values', 'diag')}
+        self.got = {
+            k: []
+            for k in (
+                'map',
+                'instruction',
+                'pose',
+                'reward',
+                'terminated',
+                'goal',
+                'values',
+                'diag',
+            )
+        }
         sub = self.create_subscription
         sub(OccupancyGrid, 'entity_map', self.got['map'].append, LATCHED)
         sub(String, 'instruction', self.got['instruction'].append, LATCHED)
@@ -80,28 +101,36 @@ def spin_until(executor, cond, timeout=10.0):
 
 def test_episode_actions_goal_walk_and_bad_input(ros):
     make, executor = ros
-    params = [Parameter('source', value='generator-local'), Parameter('episodes', value=3),
-              Parameter('seed', value=5), Parameter('step_period', value=0.01),
-              Parameter('resolution', value=0.5), Parameter('origin_x', value=2.0)]
+    params = [
+        Parameter('source', value='generator-local'),
+        Parameter('episodes', value=3),
+        Parameter('seed', value=5),
+        Parameter('step_period', value=0.01),
+        Parameter('resolution', value=0.5),
+        Parameter('origin_x', value=2.0),
+    ]
     gw = make(GridWorldNode, namespace=NAMESPACE, parameter_overrides=params)
     probe = make(Probe)
     got = probe.got
-    spin_until(executor, lambda: got['map'] and got['instruction'] and got['goal']
-               and got['values'])
+    spin_until(
+        executor, lambda: got['map'] and got['instruction'] and got['goal'] and got['values']
+    )
     # agent poses are not latched: restart the episode now that the probe listens
     future = probe.reset.call_async(Trigger.Request())
     spin_until(executor, lambda: future.done() and got['pose'])
     data = generate(3, seed=5, mode='local')
     # the latched episode: data-set row 0 is the map's top (largest y) row
-    grid = convert.occupancy_grid_to_grid(got['map'][-1], 10 ** 6)
+    grid = convert.occupancy_grid_to_grid(got['map'][-1], 10**6)
     assert np.array_equal(grid, data.grids[0])
     assert list(got['map'][-1].data[:10]) == list(data.grids[0][-1])  # grid row 0 = south
     assert got['instruction'][-1].data == data.instructions[0]
     info = got['map'][-1].info
-    assert convert.point_to_cell(got['goal'][-1].pose.position.x, got['goal'][-1].pose.position.y,
-                                 info) == tuple(data.goals[0])
-    np.testing.assert_allclose(convert.float32_multiarray_to_value_map(got['values'][-1]),
-                               data.values[0], atol=1e-5)
+    assert convert.point_to_cell(
+        got['goal'][-1].pose.position.x, got['goal'][-1].pose.position.y, info
+    ) == tuple(data.goals[0])
+    np.testing.assert_allclose(
+        convert.float32_multiarray_to_value_map(got['values'][-1]), data.values[0], atol=1e-5
+    )
 
     def cell(pose):
         return convert.point_to_cell(pose.pose.position.x, pose.pose.position.y, info)
@@ -122,8 +151,10 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
     probe.goal.publish(far)
     wrong = convert.cell_to_pose((0, 0), info, 'odom', gw.get_clock().now().to_msg())
     probe.goal.publish(wrong)
-    spin_until(executor, lambda: len([d for d in got['diag']
-                                      if d.status[0].level == DiagnosticStatus.WARN]) >= 3)
+    spin_until(
+        executor,
+        lambda: len([d for d in got['diag'] if d.status[0].level == DiagnosticStatus.WARN]) >= 3,
+    )
     messages = ' | '.join(d.status[0].message for d in got['diag'])
     assert 'action 7 ignored' in messages and 'outside' in messages and "'odom'" in messages
     assert len(got['pose']) == n_pose
@@ -140,15 +171,19 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
 
 
 def test_closed_loop_demo(tmp_path, capsys):
-    """Three episodes through the real processes, each goal_pose on the cell the instruction names.
+    """
+    Three episodes through the real processes, each goal_pose on the cell the instruction names.
+
     The grounder hears the first instruction as
     it is published (no episode is restarted): the bag holds exactly one instruction and one
     goal per episode. Its agent poses were logged on reception, although this process drew a
-    PNG between episodes."""
+    PNG between episodes.
+    """
     from spatial_grounding_ros.ros.demo import run_demo
 
-    summary = run_demo(tmp_path, episodes=3, seed=1, data_dir=str(tmp_path / 'no_data'),
-                       step_period=0.02)
+    summary = run_demo(
+        tmp_path, episodes=3, seed=1, data_dir=str(tmp_path / 'no_data'), step_period=0.02
+    )
     out = capsys.readouterr().out
     assert summary['episodes'] == 3
     # the shipped default sends goal_pose to the named cell (about 95% of generated 10x10
@@ -171,31 +206,48 @@ def test_closed_loop_demo(tmp_path, capsys):
     make_reader = pytest.importorskip('mcap.reader', reason='pip install mcap').make_reader
     [mcap_file] = (tmp_path / 'demo_bag').glob('*.mcap')
     with open(mcap_file, 'rb') as stream:
-        delays = [m.log_time - m.publish_time
-                  for _, c, m in make_reader(stream).iter_messages()
-                  if c.topic.endswith('/agent_pose')]
+        delays = [
+            m.log_time - m.publish_time
+            for _, c, m in make_reader(stream).iter_messages()
+            if c.topic.endswith('/agent_pose')
+        ]
     assert delays and max(delays) < 0.5e9, max(delays) / 1e9
 
 
-@pytest.mark.parametrize('parameter, needle', [
-    ('step_period:=-1.0', 'parameter step_period must be 0.001..60, got -1.0'),
-    ('step_period:=1', 'parameter step_period must be a double (write 5.0, not 5), got an'),
-    ('source:=nowhere', 'parameter source must be one of generator, generator-local'),
-    ('seed:=abc', "parameter seed must be an integer, got a string 'abc'"),
-    ('frame_id:=""', 'parameter frame_id must not be empty'),
-    ('source:=isi', 'data file not found'),  # a task whose data is not in data_dir
-])
+@pytest.mark.parametrize(
+    'parameter, needle',
+    [
+        ('step_period:=-1.0', 'parameter step_period must be 0.001..60, got -1.0'),
+        ('step_period:=1', 'parameter step_period must be a double (write 5.0, not 5), got an'),
+        ('source:=nowhere', 'parameter source must be one of generator, generator-local'),
+        ('seed:=abc', "parameter seed must be an integer, got a string 'abc'"),
+        ('frame_id:=""', 'parameter frame_id must not be empty'),
+        ('source:=isi', 'data file not found'),  # a task whose data is not in data_dir
+    ],
+)
 def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path, parameter, needle):
+    from pathlib import Path
     import subprocess
     import sys
-    from pathlib import Path
 
     exe = Path(sys.executable).parent / 'gridworld'
     if not exe.is_file():
         pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
-    result = subprocess.run([str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}_bad', '-p',
-                             parameter, '-p', f'data_dir:={tmp_path / "no_data"}'],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [
+            str(exe),
+            '--ros-args',
+            '-r',
+            f'__ns:={NAMESPACE}_bad',
+            '-p',
+            parameter,
+            '-p',
+            f'data_dir:={tmp_path / "no_data"}',
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 1, result.stderr
     err = result.stderr
     assert err.splitlines() == [err.strip()] and err.startswith('gridworld: error: '), err

@@ -1,18 +1,28 @@
-"""The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The venv console script `grounder` with its packaged defaults.
+
+The venv console script `grounder`, with its packaged defaults, answers real PuddleWorld
 test maps with the goal that `spatial-grounding eval` predicts for them (the argmax of the
 same model's value map, computed through the training code's batched predict); bad start-up
-input is one error line and exit status 1."""
+input is one error line and exit status 1.
+"""
+
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402
-
+from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402, I100
 from spatial_grounding_ros import world  # noqa: E402
 from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
 from spatial_grounding_ros.datasets import load_task  # noqa: E402
@@ -30,8 +40,12 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
     test = load_task('pw-local', 'test', data_dir).subset(np.arange(0, 399, 57))
     loaded = load_checkpoint(DEFAULT_CHECKPOINT)
     expected = world.argmax_cells(predict(loaded.model, loaded.vocab, test))
-    process = subprocess.Popen([str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}'],
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    process = subprocess.Popen(
+        [str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}'],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         graph = ros_context
         probe = graph.add(make_probe(graph.context, NAMESPACE, f'{NAMESPACE}/spatial_grounder'))
@@ -54,19 +68,23 @@ def test_console_grounder_answers_puddleworld_test_maps_like_eval(data_dir, ros_
 
 
 def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
-    """README: a bad checkpoint, entity table or parameter value or type stops the node at
-    start-up with one line `grounder: error: ...` and exit status 1 (no traceback), naming
-    the problem."""
+    """
+    Check a claim of the README.
+
+    README: a bad checkpoint, entity table or parameter value or type stops the node at start-up
+    with one line `grounder: error: ...` and exit status 1 (no traceback), naming the problem.
+    """
     exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
         pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
     corrupt = tmp_path / 'corrupt.pt'
     corrupt.write_bytes(b'\x00 not a checkpoint')
     cases = {  # parameter -> what the line must say
-        f"checkpoint:={tmp_path / 'missing.pt'}": 'missing.pt: checkpoint not found',
+        f'checkpoint:={tmp_path / "missing.pt"}': 'missing.pt: checkpoint not found',
         f'checkpoint:={corrupt}': 'corrupt.pt: not a readable checkpoint',
-        'entity_table:=entities_isi.yaml':
-            'is not the one checkpoint pw_t-rnet-attn was trained on',
+        'entity_table:=entities_isi.yaml': (
+            'is not the one checkpoint pw_t-rnet-attn was trained on'
+        ),
         'entity_table:=no_such_table.yaml': 'no_such_table.yaml: config file not found',
         # parameters are checked against their declared type and range before anything loads
         'max_cells:=abc': "parameter max_cells must be an integer, got a string 'abc'",
@@ -78,9 +96,15 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
         "default_frame_id:=''": 'parameter default_frame_id must not be empty',
     }
     namespace = unique_namespace('start_up_test')
-    processes = {p: subprocess.Popen([str(exe), '--ros-args', '-r', f'__ns:={namespace}',
-                                      '-p', p], stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True) for p in cases}
+    processes = {
+        p: subprocess.Popen(
+            [str(exe), '--ros-args', '-r', f'__ns:={namespace}', '-p', p],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for p in cases
+    }
     for parameter, needle in cases.items():
         out, err = processes[parameter].communicate(timeout=120)
         assert processes[parameter].returncode == 1, (parameter, err)
@@ -89,16 +113,24 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
 
 
 def test_a_bad_params_file_is_one_line_of_ours_and_exit_1(tmp_path):
-    """README: a missing or malformed --params-file exits 1 with our one error line after
-    rcl's own parse error, and no traceback."""
+    """
+    Check a claim of the README.
+
+    README: a missing or malformed --params-file exits 1 with our one error line after rcl's own
+    parse error, and no traceback.
+    """
     exe = Path(sys.executable).parent / 'grounder'
     if not exe.is_file():
         pytest.skip(f'{exe} is not installed (pip install -e . makes it)')
     malformed = tmp_path / 'malformed.yaml'
     malformed.write_text('spatial_grounder: [unclosed\n')
     for path in (tmp_path / 'missing.yaml', malformed):
-        result = subprocess.run([str(exe), '--ros-args', '--params-file', str(path)],
-                                capture_output=True, text=True, timeout=60)
+        result = subprocess.run(
+            [str(exe), '--ros-args', '--params-file', str(path)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert result.returncode == 1, result.stderr
         assert 'Traceback' not in result.stderr
         ours = [line for line in result.stderr.splitlines() if '[rcl]' not in line]

@@ -1,21 +1,31 @@
-"""The grounder as a lifecycle node, driven over real DDS by a lifecycle client (what Nav2's
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The grounder as a lifecycle node, driven over real DDS by a lifecycle client.
+
+The grounder as a lifecycle node, driven over real DDS by a lifecycle client (what Nav2's
 lifecycle manager does): with autostart false it waits unconfigured; configure loads the
 model and creates the topics; only while active does an instruction get a goal; deactivate
 drops the held instruction; cleanup releases the model, the map and the topics; a configure
-that cannot load the checkpoint fails and leaves the node unconfigured and serving."""
+that cannot load the checkpoint fails and leaves the node unconfigured and serving.
+"""
+
 import time
 
 import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
 from lifecycle_msgs.msg import State, Transition  # noqa: E402
 from lifecycle_msgs.srv import ChangeState, GetState  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-
 from spatial_grounding_ros.generator import generate  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 
@@ -28,8 +38,9 @@ class LifecycleClient:
 
     def __init__(self, graph, node_name: str):
         self.graph = graph
-        caller = graph.add(Node('lifecycle_manager', namespace=unique_namespace('manager'),
-                                context=graph.context))
+        caller = graph.add(
+            Node('lifecycle_manager', namespace=unique_namespace('manager'), context=graph.context)
+        )
         self.change = caller.create_client(ChangeState, f'{node_name}/change_state')
         self.get = caller.create_client(GetState, f'{node_name}/get_state')
         assert self.change.wait_for_service(timeout_sec=30)
@@ -54,11 +65,17 @@ def checkpoint(tmp_path_factory):
 
 
 def start(graph, namespace, checkpoint):
-    grounder = graph.add(GrounderNode(
-        context=graph.context, namespace=namespace,
-        parameter_overrides=[Parameter('checkpoint', value=str(checkpoint)),
-                             Parameter('autostart', value=False),
-                             Parameter('torch_threads', value=0)]))
+    grounder = graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=namespace,
+            parameter_overrides=[
+                Parameter('checkpoint', value=str(checkpoint)),
+                Parameter('autostart', value=False),
+                Parameter('torch_threads', value=0),
+            ],
+        )
+    )
     probe = graph.add(make_probe(graph.context, namespace, grounder.get_fully_qualified_name()))
     return grounder, probe, LifecycleClient(graph, grounder.get_fully_qualified_name())
 
@@ -123,9 +140,13 @@ def test_transitions_over_dds_and_goals_only_while_active(ros_context, checkpoin
     assert manager.transition(Transition.TRANSITION_CLEANUP)
     assert manager.state() == 'unconfigured'
     assert grounder.grounder is None and grounder.map_msg is None
-    assert graph.wait_for(lambda: probe.instruction_pub.get_subscription_count() == 0
-                          and probe.count_publishers(f'{namespace}/goal_pose') == 0,
-                          timeout=30), 'topics not released on cleanup'
+    assert graph.wait_for(
+        lambda: (
+            probe.instruction_pub.get_subscription_count() == 0
+            and probe.count_publishers(f'{namespace}/goal_pose') == 0
+        ),
+        timeout=30,
+    ), 'topics not released on cleanup'
 
     # configure again works, and shutdown finalizes
     assert manager.transition(Transition.TRANSITION_CONFIGURE)
@@ -147,10 +168,16 @@ def test_a_configure_that_cannot_load_fails_and_the_node_keeps_serving(ros_conte
 def test_autostart_is_active_at_once(ros_context, checkpoint):
     """The default: `ros2 run` alone configures and activates."""
     graph = ros_context
-    grounder = graph.add(GrounderNode(
-        context=graph.context, namespace=unique_namespace('autostart_test'),
-        parameter_overrides=[Parameter('checkpoint', value=str(checkpoint)),
-                             Parameter('torch_threads', value=0)]))
+    grounder = graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=unique_namespace('autostart_test'),
+            parameter_overrides=[
+                Parameter('checkpoint', value=str(checkpoint)),
+                Parameter('torch_threads', value=0),
+            ],
+        )
+    )
     manager = LifecycleClient(graph, grounder.get_fully_qualified_name())
     assert manager.state() == 'active'
     assert State.PRIMARY_STATE_ACTIVE == 3

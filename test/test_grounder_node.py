@@ -1,7 +1,18 @@
-"""The grounder node over real DDS, against the Python API it adapts: every output of a good
-request matches Grounder.ground on the same grid; every kind of bad input gets a warning, a
-WARN diagnostic naming the problem and no goal, and the node answers the next good request.
-One node (a seeded untrained model, so no trained checkpoint is needed) for the module."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The grounder node over real DDS, against the Python API it adapts.
+
+Every output of a good request matches Grounder.ground on the same grid; every kind of bad input
+gets a warning, a WARN diagnostic naming the problem and no goal, and the node answers the next
+good request. One node (a seeded untrained model, so no trained checkpoint is needed) for the
+module.
+"""
+
 import time
 
 import numpy as np
@@ -10,15 +21,14 @@ import torch
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
-from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-from std_msgs.msg import Header  # noqa: E402
-
 from spatial_grounding_ros.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
 
 NAMESPACE = unique_namespace('grounder_node_test')
 MAX_CELLS = 400
@@ -40,22 +50,32 @@ def reference(checkpoint):
 @pytest.fixture(scope='module')
 def nodes(ros_module_context, checkpoint):
     graph = ros_module_context
-    grounder = graph.add(GrounderNode(
-        context=graph.context, namespace=NAMESPACE,
-        parameter_overrides=[Parameter('checkpoint', value=str(checkpoint)),
-                             Parameter('max_cells', value=MAX_CELLS),
-                             Parameter('max_instruction_chars', value=MAX_CHARS),
-                             # leave torch's thread count to the rest of the test session
-                             Parameter('torch_threads', value=0)]))
+    grounder = graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=NAMESPACE,
+            parameter_overrides=[
+                Parameter('checkpoint', value=str(checkpoint)),
+                Parameter('max_cells', value=MAX_CELLS),
+                Parameter('max_instruction_chars', value=MAX_CHARS),
+                # leave torch's thread count to the rest of the test session
+                Parameter('torch_threads', value=0),
+            ],
+        )
+    )
     probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
     assert graph.wait_for(probe.connected, timeout=15), 'probe and grounder never matched'
     return graph, grounder, probe
 
 
 def wait_held(nodes, message) -> None:
-    """Until the grounder says it holds `message` as its map (its OK entity_map diagnostic
+    """
+    Wait until the grounder says it holds `message` as its map.
+
+    Until the grounder says it holds `message` as its map (its OK entity_map diagnostic
     with that stamp): topics are not ordered among each other, so an instruction sent right
-    after a map could otherwise overtake it. The node's own state agrees."""
+    after a map could otherwise overtake it. The node's own state agrees.
+    """
     graph, grounder, probe = nodes
     assert graph.wait_for(lambda: probe.holds(message)), 'no OK diagnostic for the map'
     assert grounder.map_msg.header.stamp == message.header.stamp
@@ -75,8 +95,9 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id='map', gr
     before = probe.counts()
     probe.publish_instruction(text)
     outputs = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics')
-    assert graph.wait_for(lambda: all(probe.new(k, before) for k in outputs)), \
+    assert graph.wait_for(lambda: all(probe.new(k, before) for k in outputs)), (
         f'missing outputs for a good request: {probe.counts()} after {before}'
+    )
     expected = reference.ground(grid, text)
     info = info or convert.map_info(grid.shape)
     [goal] = probe.new('goals', before)
@@ -84,9 +105,11 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id='map', gr
     # README: the goal (and the maps) carry the entity map's stamp, not the time of grounding
     assert goal.header.stamp == map_message.header.stamp
     assert (goal.pose.position.x, goal.pose.position.y, goal.pose.position.z) == pytest.approx(
-        convert.cell_centre(expected.goal, info))
-    np.testing.assert_allclose(raw_values(probe.new('raw_maps', before)[-1]), expected.values,
-                               rtol=1e-6, atol=1e-6)
+        convert.cell_centre(expected.goal, info)
+    )
+    np.testing.assert_allclose(
+        raw_values(probe.new('raw_maps', before)[-1]), expected.values, rtol=1e-6, atol=1e-6
+    )
     [value_map] = probe.new('value_maps', before)
     assert value_map.header.stamp == map_message.header.stamp
     assert (value_map.info.width, value_map.info.height) == (grid.shape[1], grid.shape[0])
@@ -106,8 +129,9 @@ def good_request(nodes, reference, world: int = 0, info=None, frame_id='map', gr
 def expect_rejected(nodes, before: dict, problem: str):
     """Since `before`: one WARN diagnostic naming `problem`, a warning saying it, no goal."""
     graph, grounder, probe = nodes
-    assert graph.wait_for(lambda: probe.new('diagnostics', before)), \
+    assert graph.wait_for(lambda: probe.new('diagnostics', before)), (
         f'no diagnostic for bad input ({problem!r})'
+    )
     [status] = probe.new('diagnostics', before)
     assert status.level == DiagnosticStatus.WARN and problem in status.message, status
     assert graph.wait_for(lambda: any(problem in w for w in probe.new('warnings', before)))
@@ -117,13 +141,19 @@ def expect_rejected(nodes, before: dict, problem: str):
 
 def test_good_request_matches_the_python_api(nodes, reference):
     good_request(nodes, reference, world=0)
-    good_request(nodes, reference, world=1, frame_id='odom',
-                 info=convert.map_info((10, 10), resolution=0.25, origin=(-3.0, 4.0), yaw=0.4))
+    good_request(
+        nodes,
+        reference,
+        world=1,
+        frame_id='odom',
+        info=convert.map_info((10, 10), resolution=0.25, origin=(-3.0, 4.0), yaw=0.4),
+    )
 
 
 def bad_map(grid=None, **change):
-    msg = convert.grid_to_occupancy_grid(WORLDS.grids[0] if grid is None else grid,
-                                         Header(frame_id='map'))
+    msg = convert.grid_to_occupancy_grid(
+        WORLDS.grids[0] if grid is None else grid, Header(frame_id='map')
+    )
     for key, value in change.items():
         setattr(msg.info, key, value)
     return msg
@@ -135,18 +165,31 @@ def short_data():
     return msg
 
 
-@pytest.mark.parametrize('make, problem', [
-    (short_data, 'map data has 99 values, but width x height = 10x10 = 100'),
-    (lambda: bad_map(width=0), 'width and height must be positive'),
-    (lambda: bad_map(height=0), 'width and height must be positive'),
-    (lambda: bad_map(np.zeros((20, 21), int)), f'more than max_cells={MAX_CELLS}'),
-    (lambda: bad_map(np.full((3, 3), 12)), 'entity values [12] outside the puddleworld table'),
-    (lambda: bad_map(np.full((3, 3), -1)), 'entity values [-1] outside the puddleworld table'),
-    (lambda: bad_map(resolution=float('nan')), 'resolution nan must be a positive'),
-    (lambda: bad_map(resolution=0.0), 'resolution 0.0 must be a positive'),
-    (lambda: bad_map(resolution=-0.5), 'resolution -0.5 must be a positive'),
-], ids=['data-length', 'width-0', 'height-0', 'too-many-cells', 'entity-12', 'entity-minus-1',
-        'resolution-nan', 'resolution-0', 'resolution-negative'])
+@pytest.mark.parametrize(
+    'make, problem',
+    [
+        (short_data, 'map data has 99 values, but width x height = 10x10 = 100'),
+        (lambda: bad_map(width=0), 'width and height must be positive'),
+        (lambda: bad_map(height=0), 'width and height must be positive'),
+        (lambda: bad_map(np.zeros((20, 21), int)), f'more than max_cells={MAX_CELLS}'),
+        (lambda: bad_map(np.full((3, 3), 12)), 'entity values [12] outside the puddleworld table'),
+        (lambda: bad_map(np.full((3, 3), -1)), 'entity values [-1] outside the puddleworld table'),
+        (lambda: bad_map(resolution=float('nan')), 'resolution nan must be a positive'),
+        (lambda: bad_map(resolution=0.0), 'resolution 0.0 must be a positive'),
+        (lambda: bad_map(resolution=-0.5), 'resolution -0.5 must be a positive'),
+    ],
+    ids=[
+        'data-length',
+        'width-0',
+        'height-0',
+        'too-many-cells',
+        'entity-12',
+        'entity-minus-1',
+        'resolution-nan',
+        'resolution-0',
+        'resolution-negative',
+    ],
+)
 def test_bad_map_is_rejected_and_the_node_recovers(nodes, reference, make, problem):
     graph, grounder, probe = nodes
     before = probe.counts()
@@ -156,13 +199,20 @@ def test_bad_map_is_rejected_and_the_node_recovers(nodes, reference, make, probl
     good_request(nodes, reference, world=2)
 
 
-@pytest.mark.parametrize('text, problem', [
-    ('', 'instruction is empty'),
-    (' \t\n ', 'instruction is empty'),
-    ('reach cell ' * 10, f'more than max_instruction_chars={MAX_CHARS}'),
-    ('xyzzy plugh frobozz', "no word of the instruction 'xyzzy plugh frobozz' is in the vocab"),
-    ('?!...', 'instruction has no words'),
-], ids=['empty', 'whitespace', 'too-long', 'unknown-words', 'no-words'])
+@pytest.mark.parametrize(
+    'text, problem',
+    [
+        ('', 'instruction is empty'),
+        (' \t\n ', 'instruction is empty'),
+        ('reach cell ' * 10, f'more than max_instruction_chars={MAX_CHARS}'),
+        (
+            'xyzzy plugh frobozz',
+            "no word of the instruction 'xyzzy plugh frobozz' is in the vocab",
+        ),
+        ('?!...', 'instruction has no words'),
+    ],
+    ids=['empty', 'whitespace', 'too-long', 'unknown-words', 'no-words'],
+)
 def test_bad_instruction_is_rejected_and_the_node_recovers(nodes, reference, text, problem):
     graph, grounder, probe = nodes
     good_request(nodes, reference, world=0)  # a map is held: the rejection is the text's
@@ -187,7 +237,8 @@ def test_instruction_without_a_map_is_held_until_one_arrives(nodes, reference):
     expected = reference.ground(WORLDS.grids[1], text)
     position = probe.goals[-1].pose.position
     assert (position.x, position.y) == pytest.approx(
-        convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2])
+        convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2]
+    )
 
 
 def test_map_of_another_size_is_a_new_map(nodes, reference):
@@ -211,25 +262,32 @@ def test_reground_on_map_change(nodes, reference):
         expected = reference.ground(WORLDS.grids[1], WORLDS.instructions[0])
         position = probe.goals[-1].pose.position
         assert (position.x, position.y) == pytest.approx(
-            convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2])
+            convert.cell_centre(expected.goal, convert.map_info((10, 10)))[:2]
+        )
     finally:
         grounder.set_parameters([Parameter('reground_on_map_change', value=False)])
 
 
 def test_a_rejected_instruction_drops_the_held_one(nodes, reference):
-    """README: "a rejected instruction drops the held instruction". With
-    reground_on_map_change, a held instruction is grounded again on each new map; after a
-    rejected instruction the next map gets no goal. Likewise an instruction waiting for a
-    map is dropped by a rejected one and never grounded."""
+    """
+    README: "a rejected instruction drops the held instruction".
+
+    With reground_on_map_change, a held instruction is grounded again on each new map; after a
+    rejected instruction the next map gets no goal. Likewise an instruction waiting for a map is
+    dropped by a rejected one and never grounded.
+    """
     graph, grounder, probe = nodes
     good_request(nodes, reference, world=0)
     grounder.set_parameters([Parameter('reground_on_map_change', value=True)])
     try:
         before = probe.counts()
         probe.publish_map(WORLDS.grids[1])  # the control: the held instruction is re-grounded
-        assert graph.wait_for(lambda: probe.new('goals', before) and any(
-            s.name.endswith(': grounding') for s in probe.new('diagnostics', before))), \
-            'held instruction not re-grounded'
+        assert graph.wait_for(
+            lambda: (
+                probe.new('goals', before)
+                and any(s.name.endswith(': grounding') for s in probe.new('diagnostics', before))
+            )
+        ), 'held instruction not re-grounded'
         before = probe.counts()
         probe.publish_instruction('xyzzy plugh frobozz')
         expect_rejected(nodes, before, 'no word of the instruction')
@@ -257,8 +315,12 @@ def test_a_rejected_instruction_drops_the_held_one(nodes, reference):
 
 
 def test_empty_frame_id_takes_default_frame_id(nodes, reference):
-    """README: `default_frame_id` (default `map`) is the outputs' frame when the entity map's
-    frame_id is empty; a non-empty frame is passed through (good_request's "odom")."""
+    """
+    Check a claim of the README.
+
+    README: `default_frame_id` (default `map`) is the outputs' frame when the entity map's frame_id
+    is empty; a non-empty frame is passed through (good_request's "odom").
+    """
     graph, grounder, probe = nodes
     assert grounder.get_parameter('default_frame_id').value == 'map'
     try:
@@ -276,9 +338,12 @@ def test_empty_frame_id_takes_default_frame_id(nodes, reference):
 
 
 def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
-    """`ros2 param set ... value_map_encoding cost`: the next value_map has the goal cell at
-    0 and the worst cell at 100, each cell 100 minus its display value; `display` again
-    restores the best = 100 scale."""
+    """
+    Check `ros2 param set ... value_map_encoding cost`.
+
+    The next value_map has the goal cell at 0 and the worst cell at 100, each cell 100 minus its
+    display value; `display` again restores the best = 100 scale.
+    """
     graph, grounder, probe = nodes
     good_request(nodes, reference, world=1)  # display: best = 100 (checked there)
     shown = probe.value_maps[-1].data
@@ -299,17 +364,26 @@ def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
 
 
 class FailingModel(torch.nn.Module):
-    """A model whose forward raises as torch does when a map needs more memory than there
-    is (a real 256x256 request with a long instruction can; this one does it on demand)."""
+    """
+    Return a model whose forward raises as torch does when memory runs out.
+
+    A model whose forward raises as torch does when a map needs more memory than there
+    is (a real 256x256 request with a long instruction can; this one does it on demand).
+    """
 
     def forward(self, grids, tokens, return_aux=False):
-        raise RuntimeError('DefaultCPUAllocator: not enough memory: you tried to allocate '
-                           '412316860416 bytes.')
+        raise RuntimeError(
+            'DefaultCPUAllocator: not enough memory: you tried to allocate 412316860416 bytes.'
+        )
 
 
 def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes, reference):
-    """README: "ERROR if the model fails": an exception in the model's forward is an ERROR
-    diagnostic and an error log line naming it, no goal, and the next request is answered."""
+    """
+    Check a claim of the README.
+
+    README: "ERROR if the model fails": an exception in the model's forward is an ERROR diagnostic
+    and an error log line naming it, no goal, and the next request is answered.
+    """
     graph, grounder, probe = nodes
     wait_held(nodes, probe.publish_map(WORLDS.grids[0]))
     model = grounder.grounder.model
@@ -321,8 +395,9 @@ def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes
         [status] = probe.new('diagnostics', before)
         assert status.level == DiagnosticStatus.ERROR and status.name.endswith(': grounding')
         assert 'failed: RuntimeError: DefaultCPUAllocator: not enough memory' in status.message
-        assert graph.wait_for(lambda: any('DefaultCPUAllocator' in w
-                                          for w in probe.new('warnings', before)))
+        assert graph.wait_for(
+            lambda: any('DefaultCPUAllocator' in w for w in probe.new('warnings', before))
+        )
         time.sleep(NO_GOAL_WAIT)
         assert not probe.new('goals', before)
     finally:

@@ -1,13 +1,26 @@
-"""Models: the paper's sizes, gradient flow into every module, batching, any map size."""
-import pytest
-import torch
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
 
+"""Models: the paper's sizes, gradient flow into every module, batching, any map size."""
+
+import pytest
 from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
 from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
-from spatial_grounding_ros.models import (MODELS, ModelConfig, TRNet, build_model, neighbour_index,
-                                          relation_param_count, relative_positions)
+from spatial_grounding_ros.models import (
+    build_model,
+    ModelConfig,
+    MODELS,
+    neighbour_index,
+    relation_param_count,
+    relative_positions,
+    TRNet,
+)
 from spatial_grounding_ros.text import Vocabulary
+import torch
 
 
 def test_parameter_vector_sizes_are_the_papers():
@@ -15,17 +28,22 @@ def test_parameter_vector_sizes_are_the_papers():
     assert relation_param_count(ModelConfig(embed_dim=13)) == 383
     attn = TRNet(ModelConfig(embed_dim=7, vocab_size=10))
     assert attn.decoder.out_features == 263
-    assert build_model("t-cnn", ModelConfig(embed_dim=7)).decoder.out_features == 66
-    assert build_model("t-cnn", ModelConfig(embed_dim=13)).decoder.out_features == 120
+    assert build_model('t-cnn', ModelConfig(embed_dim=7)).decoder.out_features == 66
+    assert build_model('t-cnn', ModelConfig(embed_dim=13)).decoder.out_features == 120
 
 
 def _batch(n=6, size=10, seed=0):
-    data = generator.generate(n, seed=seed, mode="mixed", size=size)
+    data = generator.generate(n, seed=seed, mode='mixed', size=size)
     vocab = Vocabulary.build(data.instructions)
-    return data, vocab, torch.from_numpy(data.grids), torch.from_numpy(vocab.encode_batch(data.instructions))
+    return (
+        data,
+        vocab,
+        torch.from_numpy(data.grids),
+        torch.from_numpy(vocab.encode_batch(data.instructions)),
+    )
 
 
-@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize('name', list(MODELS))
 def test_gradient_reaches_every_module(name):
     data, vocab, grids, tokens = _batch()
     torch.manual_seed(0)
@@ -33,10 +51,10 @@ def test_gradient_reaches_every_module(name):
     loss = ((model(grids, tokens) - torch.from_numpy(data.values)) ** 2).mean()
     loss.backward()
     for pname, p in model.named_parameters():
-        assert p.grad is not None and p.grad.abs().sum() > 0, f"{name}: no gradient in {pname}"
+        assert p.grad is not None and p.grad.abs().sum() > 0, f'{name}: no gradient in {pname}'
 
 
-@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize('name', list(MODELS))
 def test_batched_equals_one_by_one_and_padding_is_ignored(name):
     data, vocab, grids, tokens = _batch(n=5)
     torch.manual_seed(0)
@@ -45,22 +63,26 @@ def test_batched_equals_one_by_one_and_padding_is_ignored(name):
         batched = model(grids, tokens)
         for i in range(len(grids)):
             alone = torch.from_numpy(vocab.encode_batch([data.instructions[i]]))
-            torch.testing.assert_close(model(grids[i:i + 1], alone)[0], batched[i], atol=1e-5, rtol=1e-4)
+            torch.testing.assert_close(
+                model(grids[i:i + 1], alone)[0], batched[i], atol=1e-5, rtol=1e-4
+            )
 
 
-@pytest.mark.parametrize("shape", [(3, 4), (13, 13), (32, 20)])
+@pytest.mark.parametrize('shape', [(3, 4), (13, 13), (32, 20)])
 def test_any_map_size(shape):
-    model = build_model("t-rnet-attn", ModelConfig(vocab_size=5)).eval()
+    model = build_model('t-rnet-attn', ModelConfig(vocab_size=5)).eval()
     grids = torch.randint(0, 12, (2, *shape))
     with torch.no_grad():
         values, aux = model(grids, torch.tensor([[2, 3, 4], [2, 0, 0]]), return_aux=True)
-    assert values.shape == (2, *shape) and aux["relation_map"].shape == (2, *shape)
-    torch.testing.assert_close(aux["attention"].sum(-1), torch.ones(2))
-    assert aux["attention"][1, 1:].abs().max() == 0  # no attention on padding
+    assert values.shape == (2, *shape) and aux['relation_map'].shape == (2, *shape)
+    torch.testing.assert_close(aux['attention'].sum(-1), torch.ones(2))
+    assert aux['attention'][1, 1:].abs().max() == 0  # no attention on padding
 
 
 def test_isi_sizes():
-    model = build_model("t-rnet-attn", ModelConfig(n_entities=len(ISI), embed_dim=ISI.embed_dim, vocab_size=9))
+    model = build_model(
+        't-rnet-attn', ModelConfig(n_entities=len(ISI), embed_dim=ISI.embed_dim, vocab_size=9)
+    )
     values = model(torch.randint(0, len(ISI), (2, 13, 13)), torch.randint(1, 9, (2, 7)))
     assert values.shape == (2, 13, 13)
 
@@ -68,44 +90,50 @@ def test_isi_sizes():
 def test_checkpoint_round_trip_and_mismatch_errors(tmp_path):
     data, vocab, grids, tokens = _batch()
     cfg = ModelConfig(vocab_size=len(vocab))
-    model = build_model("t-rnet-attn", cfg).eval()
-    path = save_checkpoint(tmp_path / "m.pt", "t-rnet-attn", model, cfg, vocab, PUDDLEWORLD, task="test")
+    model = build_model('t-rnet-attn', cfg).eval()
+    path = save_checkpoint(
+        tmp_path / 'm.pt', 't-rnet-attn', model, cfg, vocab, PUDDLEWORLD, task='test'
+    )
     loaded = load_checkpoint(path)  # weights_only=True inside
-    assert loaded.header["task"] == "test" and loaded.vocab.words == vocab.words
+    assert loaded.header['task'] == 'test' and loaded.vocab.words == vocab.words
     with torch.no_grad():
         torch.testing.assert_close(loaded.model(grids, tokens), model(grids, tokens))
     with pytest.raises(ValueError, match="holds model 't-rnet-attn', not 't-cnn'"):
-        load_checkpoint(path, expect_model="t-cnn")
-    with pytest.raises(ValueError, match="entity table"):
+        load_checkpoint(path, expect_model='t-cnn')
+    with pytest.raises(ValueError, match='entity table'):
         load_checkpoint(path, expect_entities=ISI)
-    (tmp_path / "bad.pt").write_bytes(b"garbage")
-    with pytest.raises(ValueError, match="bad.pt: not a readable checkpoint"):
-        load_checkpoint(tmp_path / "bad.pt")
-    with pytest.raises(FileNotFoundError, match="nope.pt"):
-        load_checkpoint(tmp_path / "nope.pt")
+    (tmp_path / 'bad.pt').write_bytes(b'garbage')
+    with pytest.raises(ValueError, match='bad.pt: not a readable checkpoint'):
+        load_checkpoint(tmp_path / 'bad.pt')
+    with pytest.raises(FileNotFoundError, match='nope.pt'):
+        load_checkpoint(tmp_path / 'nope.pt')
     # a vocabulary of another size than the weights: caught at load time
     blob = torch.load(path, weights_only=True)
-    blob["header"]["vocabulary"] = blob["header"]["vocabulary"] + ["extra"]
-    torch.save(blob, tmp_path / "vocab.pt")
-    with pytest.raises(ValueError, match="vocab"):
-        load_checkpoint(tmp_path / "vocab.pt")
+    blob['header']['vocabulary'] = blob['header']['vocabulary'] + ['extra']
+    torch.save(blob, tmp_path / 'vocab.pt')
+    with pytest.raises(ValueError, match='vocab'):
+        load_checkpoint(tmp_path / 'vocab.pt')
     # a header without a hyper-parameter is named, never silently defaulted
     blob = torch.load(path, weights_only=True)
-    del blob["header"]["config"]["head_slope"]
-    torch.save(blob, tmp_path / "old.pt")
-    with pytest.raises(ValueError, match="old.pt: model config lacks head_slope"):
-        load_checkpoint(tmp_path / "old.pt")
+    del blob['header']['config']['head_slope']
+    torch.save(blob, tmp_path / 'old.pt')
+    with pytest.raises(ValueError, match='old.pt: model config lacks head_slope'):
+        load_checkpoint(tmp_path / 'old.pt')
 
 
 def test_unknown_model_name():
     with pytest.raises(ValueError, match="unknown model 'resnet'"):
-        build_model("resnet", ModelConfig())
+        build_model('resnet', ModelConfig())
 
 
 def test_no_python_loop_over_cells_cost_is_flat_in_batch():
-    """One batched call for 64 maps agrees with the same maps in one call of 1 each (above)
-    and its graph has a fixed number of nodes, whatever the map size."""
-    model = build_model("t-rnet-attn", ModelConfig(vocab_size=5))
+    """
+    Check that one batched call for 64 maps agrees with 64 single calls.
+
+    One batched call for 64 maps agrees with the same maps in one call of 1 each (above)
+    and its graph has a fixed number of nodes, whatever the map size.
+    """
+    model = build_model('t-rnet-attn', ModelConfig(vocab_size=5))
     counts = []
     for size in (4, 16):
         out = model(torch.randint(0, 12, (2, size, size)), torch.tensor([[2, 3], [3, 4]]))
@@ -121,40 +149,53 @@ def test_no_python_loop_over_cells_cost_is_flat_in_batch():
 
 
 def test_t_rnet_attn_at_zero_attention_is_t_rnet():
-    """README: the attention projection starts at zero, which makes t-RNetAttn exactly t-RNet
-    (uniform attention over the words, and the decoder is linear): so the warm-up may run
-    the attention-free forward. Same weights, same maps, padding included; and any non-zero
-    attention changes the answer (so the comparison can fail)."""
+    """
+    Check a claim of the README.
+
+    README: the attention projection starts at zero, which makes t-RNetAttn exactly t-RNet (uniform
+    attention over the words, and the decoder is linear): so the warm-up may run the attention-free
+    forward. Same weights, same maps, padding included; and any non-zero attention changes the
+    answer (so the comparison can fail).
+    """
     data, vocab, grids, tokens = _batch(n=6)
     cfg = ModelConfig(vocab_size=len(vocab))
     torch.manual_seed(0)
-    attn = build_model("t-rnet-attn", cfg).eval()
+    attn = build_model('t-rnet-attn', cfg).eval()
     assert attn.attn.weight.abs().max() == 0  # as built
-    rnet = build_model("t-rnet", cfg).eval()
-    rnet.load_state_dict({k: v for k, v in attn.state_dict().items() if not k.startswith("attn.")})
+    rnet = build_model('t-rnet', cfg).eval()
+    rnet.load_state_dict({k: v for k, v in attn.state_dict().items() if not k.startswith('attn.')})
     with torch.no_grad():
         expected, expected_aux = rnet(grids, tokens, return_aux=True)
         with_attention, aux = attn(grids, tokens, return_aux=True)
         torch.testing.assert_close(with_attention, expected, rtol=1e-5, atol=1e-6)
-        torch.testing.assert_close(aux["relation_map"], expected_aux["relation_map"],
-                                   rtol=1e-5, atol=1e-6)
+        torch.testing.assert_close(
+            aux['relation_map'], expected_aux['relation_map'], rtol=1e-5, atol=1e-6
+        )
         attn.attention_on = False  # the warm-up's forward
         torch.testing.assert_close(attn(grids, tokens), expected, rtol=0, atol=0)
         attn.attention_on = True
         attn.attn.weight.normal_()
         with pytest.raises(AssertionError):
-            torch.testing.assert_close(attn(grids, tokens, return_aux=True)[1]["relation_map"],
-                                       expected_aux["relation_map"], rtol=1e-5, atol=1e-6)
+            torch.testing.assert_close(
+                attn(grids, tokens, return_aux=True)[1]['relation_map'],
+                expected_aux['relation_map'],
+                rtol=1e-5,
+                atol=1e-6,
+            )
 
 
 def test_word_matmuls_equal_per_pair_weights():
-    """README: each relation layer applies every word's weights to all pairs in one matmul and
-    mixes the results by attention, "same output" as building W_ij = sum_k alpha_ij(k) W(k)
-    per pair. Here the per-pair way is written out: the pair's h_ij = sum_k alpha_ij(k) h(k)
-    is decoded to its own 263 weights (the paper's formulation) and run through the MLP."""
+    """
+    Check a claim of the README.
+
+    README: each relation layer applies every word's weights to all pairs in one matmul and mixes
+    the results by attention, "same output" as building W_ij = sum_k alpha_ij(k) W(k) per pair.
+    Here the per-pair way is written out: the pair's h_ij = sum_k alpha_ij(k) h(k) is decoded to
+    its own 263 weights (the paper's formulation) and run through the MLP.
+    """
     data, vocab, grids, tokens = _batch(n=3)
     torch.manual_seed(1)
-    model = build_model("t-rnet-attn", ModelConfig(vocab_size=len(vocab))).eval()
+    model = build_model('t-rnet-attn', ModelConfig(vocab_size=len(vocab))).eval()
     with torch.no_grad():
         model.attn.weight.normal_()  # attention that differs by pair and word
         values, aux = model(grids, tokens, return_aux=True)
@@ -162,18 +203,19 @@ def test_word_matmuls_equal_per_pair_weights():
         b, h, w = grids.shape
         centre, nbrs = neighbour_index(h, w)
         phi = model.phi(grids).flatten(1, 2)
-        phi_i, phi_j = phi[:, centre], phi[:, nbrs]                      # (B, N, k), (B, N, 8, k)
+        phi_i, phi_j = phi[:, centre], phi[:, nbrs]  # (B, N, k), (B, N, 8, k)
         words, mask, mean = model.text(tokens)
         pair = torch.cat([phi_i.unsqueeze(2).expand_as(phi_j), phi_j], -1)  # [phi_i; phi_j]
-        score = torch.einsum("bnpd,bld->bnpl", pair, model.attn(words))
-        alpha = score.masked_fill(~mask[:, None, None, :], float("-inf")).softmax(-1)
-        h_ij = torch.einsum("bnpl,blh->bnph", alpha, words)                # (B, N, 8, 30)
-        w1, w2, w3 = model.split_params(model.decoder(h_ij))              # per pair (.., out, in)
+        score = torch.einsum('bnpd,bld->bnpl', pair, model.attn(words))
+        alpha = score.masked_fill(~mask[:, None, None, :], float('-inf')).softmax(-1)
+        h_ij = torch.einsum('bnpl,blh->bnph', alpha, words)  # (B, N, 8, 30)
+        w1, w2, w3 = model.split_params(model.decoder(h_ij))  # per pair (.., out, in)
         rel = relative_positions(1).expand(b, h * w, -1).unsqueeze(-1)
-        x = torch.cat([pair, rel], -1).unsqueeze(-1)                      # (B, N, 8, 2k+1, 1)
+        x = torch.cat([pair, rel], -1).unsqueeze(-1)  # (B, N, 8, 2k+1, 1)
         r = (w3 @ torch.tanh(w2 @ torch.tanh(w1 @ x))).squeeze(-1).squeeze(-1)
         z1 = r.max(-1).values.view(b, h, w)
-        torch.testing.assert_close(aux["relation_map"], z1, rtol=1e-4, atol=1e-5)
-        torch.testing.assert_close(values, model.head(z1, model.decoder(mean)[:, -3:]),
-                                   rtol=1e-4, atol=1e-5)
+        torch.testing.assert_close(aux['relation_map'], z1, rtol=1e-4, atol=1e-5)
+        torch.testing.assert_close(
+            values, model.head(z1, model.decoder(mean)[:, -3:]), rtol=1e-4, atol=1e-5
+        )
         assert z1.std() > 0.01  # not a degenerate map that any computation would match

@@ -1,34 +1,46 @@
-"""The published results hold together: each shipped checkpoint evaluates to its row of
-results/value_map.json within what another CPU can change, the results/*.md tables are those
-rows, and the README's tables are the results/*.md files."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The published results hold together.
+
+Each shipped checkpoint evaluates to its row of results/value_map.json within what another CPU can
+change, the results/*.md tables are those rows, and the README's tables are the results/*.md files.
+"""
+
 import json
-import re
 from pathlib import Path
+import re
 
 import pytest
-
 from spatial_grounding_ros import cli
-from spatial_grounding_ros.checkpoints import PACKAGED_DIR, load_checkpoint
+from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
 
 REPO = Path(__file__).resolve().parents[1]
-RESULTS = REPO / "results"
-SHIPPED = sorted(p.name for p in PACKAGED_DIR.glob("*.pt"))
+RESULTS = REPO / 'results'
+SHIPPED = sorted(p.name for p in PACKAGED_DIR.glob('*.pt'))
 
 
 def value_map_rows() -> list[dict]:
-    return json.loads((RESULTS / "value_map.json").read_text())["runs"]
+    return json.loads((RESULTS / 'value_map.json').read_text())['runs']
 
 
 def test_every_shipped_checkpoint_has_a_results_row():
-    assert SHIPPED, f"no checkpoints in {PACKAGED_DIR}"
-    named = [r.get("checkpoint") for r in value_map_rows()]
+    assert SHIPPED, f'no checkpoints in {PACKAGED_DIR}'
+    named = [r.get('checkpoint') for r in value_map_rows()]
     for name in SHIPPED:
-        assert named.count(name) == 1, f"{name}: {named.count(name)} rows in value_map.json"
+        assert named.count(name) == 1, f'{name}: {named.count(name)} rows in value_map.json'
 
 
-@pytest.mark.parametrize("checkpoint", SHIPPED)
+@pytest.mark.parametrize('checkpoint', SHIPPED)
 def test_shipped_checkpoint_evaluates_to_its_results_row(checkpoint, data_dir, capsys):
-    """`spatial-grounding eval --checkpoint <task>_<model> --task <task>` gives the row of
+    """
+    Check that `spatial-grounding eval` reproduces a row of value_map.json.
+
+    `spatial-grounding eval --checkpoint <task>_<model> --task <task>` gives the row of
     value_map.json written for that checkpoint (row and file found by name, nothing copied
     here), within what another CPU's rounding can change:
     - MD: a near-tie can flip one map's argmax, which moves that map's distance by at most
@@ -41,36 +53,59 @@ def test_shipped_checkpoint_evaluates_to_its_results_row(checkpoint, data_dir, c
       drop one sweep of score iteration on a map, which moves its mean score by under
       0.01 / cells: 1e-3 on the mean PQ is far above that and far below a model's change.
     - MSE: continuous, float32 rounding: 1e-4.
-    - n: exact."""
-    [row] = [r for r in value_map_rows() if r.get("checkpoint") == checkpoint]
-    name = checkpoint.removesuffix(".pt")
-    assert name == f"{row['task']}_{row['model']}"
+    - n: exact.
+    """
+    [row] = [r for r in value_map_rows() if r.get('checkpoint') == checkpoint]
+    name = checkpoint.removesuffix('.pt')
+    assert name == f'{row["task"]}_{row["model"]}'
     header = load_checkpoint(name).header
-    assert header["model"] == row["model"] and header["task"] == row["task"]
-    assert cli.main(["eval", "--checkpoint", name, "--task", row["task"], "--data", str(data_dir),
-                     "--json"]) == 0
+    assert header['model'] == row['model'] and header['task'] == row['task']
+    assert (
+        cli.main(
+            [
+                'eval',
+                '--checkpoint',
+                name,
+                '--task',
+                row['task'],
+                '--data',
+                str(data_dir),
+                '--json',
+            ]
+        )
+        == 0
+    )
     got = json.loads(capsys.readouterr().out)
-    expected = row["test"]
-    n = expected["n"]
-    assert got["n"] == n
-    shape = (13, 13) if row["task"] == "isi" else (10, 10)
-    tolerance = {"md": 2 * (shape[0] - 1 + shape[1] - 1) / n, "hit": 2 / n, "pq": 1e-3,
-                 "mse": 1e-4}
-    for metric in ("mse", "pq", "md", "hit"):
+    expected = row['test']
+    n = expected['n']
+    assert got['n'] == n
+    shape = (13, 13) if row['task'] == 'isi' else (10, 10)
+    tolerance = {
+        'md': 2 * (shape[0] - 1 + shape[1] - 1) / n,
+        'hit': 2 / n,
+        'pq': 1e-3,
+        'mse': 1e-4,
+    }
+    for metric in ('mse', 'pq', 'md', 'hit'):
         if metric in expected:
             assert got[metric] == pytest.approx(expected[metric], abs=tolerance[metric]), metric
 
 
 # --- tables ------------------------------------------------------------------------------
 
+
 def tables(text: str) -> list[list[list[str]]]:
-    """Every markdown table in `text`, as rows of stripped cells (header row first, the
-    --- row left out)."""
+    """
+    Return every markdown table in `text` as rows of stripped cells.
+
+    Every markdown table in `text`, as rows of stripped cells (header row first, the
+    --- row left out).
+    """
     found, current = [], []
-    for line in text.splitlines() + [""]:
-        if line.startswith("|"):
-            cells = [c.strip() for c in line.strip().strip("|").split("|")]
-            if not all(set(c) <= set("-: ") for c in cells):
+    for line in text.splitlines() + ['']:
+        if line.startswith('|'):
+            cells = [c.strip() for c in line.strip().strip('|').split('|')]
+            if not all(set(c) <= set('-: ') for c in cells):
                 current.append(cells)
         elif current:
             found.append(current)
@@ -79,30 +114,39 @@ def tables(text: str) -> list[list[list[str]]]:
 
 
 def readme_section(heading: str) -> str:
-    """The README's text from `## heading` to the next `## `."""
-    text = (REPO / "README.md").read_text()
-    start = text.index(f"\n## {heading}\n")
-    end = text.find("\n## ", start + 1)
+    """Return the README's text from `## heading` to the next `## `."""
+    text = (REPO / 'README.md').read_text()
+    start = text.index(f'\n## {heading}\n')
+    end = text.find('\n## ', start + 1)
     return text[start:end if end > 0 else None]
 
 
-@pytest.mark.parametrize("heading, results_file", [("Results: value maps", "value_map.md"),
-                                                   ("Results: RL", "rl.md"),
-                                                   ("Results: clear references", "suite.md"),
-                                                   ("Results: clear references", "ablation.md")])
+@pytest.mark.parametrize(
+    'heading, results_file',
+    [
+        ('Results: value maps', 'value_map.md'),
+        ('Results: RL', 'rl.md'),
+        ('Results: clear references', 'suite.md'),
+        ('Results: clear references', 'ablation.md'),
+    ],
+)
 def test_readme_table_is_the_results_file(heading, results_file):
-    """The table under the README heading with results/<file>'s header is that file's table
+    """
+    Check that the README's table of a results file is that file's table.
+
+    The table under the README heading with results/<file>'s header is that file's table
     cell for cell (and the file's caption line is there too): what `make reproduce` wrote is
-    what the README says."""
+    what the README says.
+    """
     source = (RESULTS / results_file).read_text()
     [expected] = tables(source)
     section = readme_section(heading)
     [got] = [t for t in tables(section) if t[0] == expected[0]] or [tables(section)[0]]
-    assert len(got) == len(expected), f"README has {len(got)} rows, {results_file} {len(expected)}"
+    assert len(got) == len(expected), f'README has {len(got)} rows, {results_file} {len(expected)}'
     for i, (a, b) in enumerate(zip(got, expected)):
-        assert a == b, f"row {i} differs: README {a} vs {results_file} {b}"
+        assert a == b, f'row {i} differs: README {a} vs {results_file} {b}'
     for line in source.splitlines():
-        if line.strip() and not line.startswith("|"):
+        if line.strip() and not line.startswith('|'):
             assert line in section, f"{results_file}'s line {line!r} is not in the README"
 
 
@@ -113,47 +157,58 @@ def rows_by_header(table: list[list[str]]) -> list[dict]:
 
 def same_number(cell: str, value: float) -> bool:
     """`cell` is `value` written with the cell's own number of decimals."""
-    decimals = len(cell.partition(".")[2])
-    return cell == f"{value:.{decimals}f}"
+    decimals = len(cell.partition('.')[2])
+    return cell == f'{value:.{decimals}f}'
 
 
 def test_value_map_table_is_the_json():
-    """results/value_map.md: one row per value_map.json run, its MSE, PQ and MD (and HIT
-    when there) that run's test metrics at the table's precision."""
-    [table] = tables((RESULTS / "value_map.md").read_text())
-    runs = {(r["task"], r["model"]): r for r in value_map_rows()}
+    """
+    Check results/value_map.md against value_map.json.
+
+    One row per value_map.json run, its MSE, PQ and MD (and HIT when there) that run's test metrics
+    at the table's precision.
+    """
+    [table] = tables((RESULTS / 'value_map.md').read_text())
+    runs = {(r['task'], r['model']): r for r in value_map_rows()}
     rows = rows_by_header(table)
-    assert {(r["task"], r["model"]) for r in rows} == set(runs)
+    assert {(r['task'], r['model']) for r in rows} == set(runs)
     for row in rows:
-        run = runs[row["task"], row["model"]]
-        metrics = [h for h in row if h.lower() in run["test"] and h.lower() != "n"]
-        assert {"MSE", "PQ", "MD"} <= set(metrics)
+        run = runs[row['task'], row['model']]
+        metrics = [h for h in row if h.lower() in run['test'] and h.lower() != 'n']
+        assert {'MSE', 'PQ', 'MD'} <= set(metrics)
         for h in metrics:
-            assert same_number(row[h], run["test"][h.lower()]), (row["task"], row["model"], h)
+            assert same_number(row[h], run['test'][h.lower()]), (row['task'], row['model'], h)
 
 
 def test_rl_table_is_the_json():
-    """results/rl.md: one row per rl.json result, its PQ and MD (ours) that run's test
-    metrics at the table's precision, and its episodes."""
-    [table] = tables((RESULTS / "rl.md").read_text())
-    runs = {(r["task"], r["model"]): r for r in json.loads((RESULTS / "rl.json").read_text())["results"]}
+    """
+    Check results/rl.md against rl.json.
+
+    One row per rl.json result, its PQ and MD (ours) that run's test metrics at the table's
+    precision, and its episodes.
+    """
+    [table] = tables((RESULTS / 'rl.md').read_text())
+    runs = {
+        (r['task'], r['model']): r
+        for r in json.loads((RESULTS / 'rl.json').read_text())['results']
+    }
     rows = rows_by_header(table)
-    assert {(r["task"], r["model"]) for r in rows} == set(runs)
+    assert {(r['task'], r['model']) for r in rows} == set(runs)
     for row in rows:
-        run = runs[row["task"], row["model"]]
-        for h in [h for h in row if re.fullmatch(r"\w+ ours", h)]:
-            assert same_number(row[h], run["test"][h.split()[0].lower()]), (row["task"], h)
-        assert int(row["episodes"]) == run["episodes"]
+        run = runs[row['task'], row['model']]
+        for h in [h for h in row if re.fullmatch(r'\w+ ours', h)]:
+            assert same_number(row[h], run['test'][h.split()[0].lower()]), (row['task'], h)
+        assert int(row['episodes']) == run['episodes']
 
 
 def test_suite_table_is_the_json():
     """results/suite.md: each checkpoint's hit per family and size is suite.json's."""
-    runs = json.loads((RESULTS / "suite.json").read_text())["runs"]
-    [table] = tables((RESULTS / "suite.md").read_text())
+    runs = json.loads((RESULTS / 'suite.json').read_text())['runs']
+    [table] = tables((RESULTS / 'suite.md').read_text())
     header, *rows = table
     assert header[2:] == list(runs)
     for row in rows:
         family, size = row[0], row[1]
         for cell, run in zip(row[2:], runs.values()):
-            summary = run["sizes"][size] if family == "**all**" else run["families"][family][size]
-            assert cell.split()[0].strip("*") == f"{summary['hit']:.1%}", (family, size)
+            summary = run['sizes'][size] if family == '**all**' else run['families'][family][size]
+            assert cell.split()[0].strip('*') == f'{summary["hit"]:.1%}', (family, size)

@@ -1,20 +1,36 @@
-"""RL by fitted value iteration: the regression target follows the value convention, only
-visited cells are regressed, a tiny run beats the untrained model on the same maps, and
---via-ros, through a real gridworld node process, learns exactly what the in-process loop does."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+RL by fitted value iteration.
+
+The regression target follows the value convention, only visited cells are regressed, a tiny run
+beats the untrained model on the same maps, and --via-ros, through a real gridworld node process,
+learns exactly what the in-process loop does.
+"""
+
 import json
 
 import numpy as np
 import pytest
-import torch
-
 from spatial_grounding_ros import cli
-from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.augment import mirror
+from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.rl import (RLConfig, ReplayBuffer, act, fitted_value_step, reproduce_rl,
-                                        train_rl)
-from spatial_grounding_ros.text import Vocabulary, tokenize
+from spatial_grounding_ros.rl import (
+    act,
+    fitted_value_step,
+    ReplayBuffer,
+    reproduce_rl,
+    RLConfig,
+    train_rl,
+)
+from spatial_grounding_ros.text import tokenize, Vocabulary
+import torch
 
 
 class ConstantMap(torch.nn.Module):
@@ -41,8 +57,8 @@ def test_fitted_value_target_uses_own_reward_and_target_max():
     grid, text = data.grids[0], data.instructions[0]
     buffer = ReplayBuffer((10, 10))
     i = buffer.map_id(grid, text)
-    buffer.add(i, (0, 0), 3, -1.0, (0, 1), False)     # entered a puddle cell
-    buffer.add(i, (4, 4), 1, 3.0, (5, 4), True)       # entered the goal
+    buffer.add(i, (0, 0), 3, -1.0, (0, 1), False)  # entered a puddle cell
+    buffer.add(i, (4, 4), 1, 3.0, (5, 4), True)  # entered the goal
     target_values = np.arange(100, dtype=np.float32).reshape(10, 10) / 100
     online = ConstantMap(np.zeros((10, 10)))
     target = ConstantMap(target_values)
@@ -53,8 +69,9 @@ def test_fitted_value_target_uses_own_reward_and_target_max():
     # loss = mean over the 2 visited cells of (pred - target)^2; SGD step lr 0.5 moves each
     # visited cell by 0.5 * 2 * (target - pred) / 2 = 0.5 * target, the rest not at all
     moved = online.values.detach().numpy()
-    expected_puddle = -1.0 + 0.9 * max(target_values[1, 1], target_values[0, 0], target_values[0, 2],
-                                       target_values[0, 1])
+    expected_puddle = -1.0 + 0.9 * max(
+        target_values[1, 1], target_values[0, 0], target_values[0, 2], target_values[0, 1]
+    )
     assert moved[0, 1] == pytest.approx(0.5 * expected_puddle, abs=1e-5)
     assert moved[5, 4] == pytest.approx(0.5 * 3.0, abs=1e-5)  # terminal: no bootstrap
     untouched = np.ones((10, 10), bool)
@@ -63,99 +80,158 @@ def test_fitted_value_target_uses_own_reward_and_target_max():
 
 
 def test_mirror_images_record_the_mirrored_worlds_rewards():
-    """Random play on one map fills its three mirror images with exactly the rewards and
-    goal of the mirrored world (augment.mirror), and swaps the instruction's directions."""
-    data = generate(3, seed=4, mode="local")
-    env = GridWorldEnv(data, step_limit=60, order="sequential")
+    """
+    Check that random play on one map fills its three mirror images correctly.
+
+    Random play on one map fills its three mirror images with exactly the rewards and
+    goal of the mirrored world (augment.mirror), and swaps the instruction's directions.
+    """
+    data = generate(3, seed=4, mode='local')
+    env = GridWorldEnv(data, step_limit=60, order='sequential')
     buffer = ReplayBuffer((10, 10), mirrors=True)
     rng = np.random.default_rng(0)
     for _ in range(3):
         obs, _ = env.reset()
-        i = buffer.map_id(obs["grid"], obs["instruction"])
+        i = buffer.map_id(obs['grid'], obs['instruction'])
         done = False
         while not done:
-            s = obs["agent"]
+            s = obs['agent']
             obs, r, terminated, truncated, _ = env.step(int(rng.integers(4)))
-            buffer.add(i, s, 0, r, obs["agent"], terminated)
+            buffer.add(i, s, 0, r, obs['agent'], terminated)
             done = terminated or truncated
     assert buffer.n_observed == 3 and len(buffer.grids) == 12
     lr, ud = mirror(data, 2), mirror(data, 1)
-    images = {"lr": lr, "ud": ud, "both": mirror(lr, 1)}
+    images = {'lr': lr, 'ud': ud, 'both': mirror(lr, 1)}
     for k in range(3):
         ids = [k * 4 + j for j in range(4)]
-        for i, world_set in zip(ids, [data, images["lr"], images["ud"], images["both"]]):
+        for i, world_set in zip(ids, [data, images['lr'], images['ud'], images['both']]):
             assert np.array_equal(buffer.grids[i], world_set.grids[k])
             assert buffer.instructions[i] == world_set.instructions[k] or i == ids[0]
             seen = buffer.visited[i]
             assert seen.sum() == buffer.visited[ids[0]].sum() > 0
             assert np.array_equal(buffer.reward[i][seen], world_set.rewards[k][seen])
             assert np.array_equal(buffer.terminal[i][seen], world_set.terminal[k][seen])
-    if "left" in tokenize(data.instructions[0]):
-        assert "right" in tokenize(buffer.instructions[1])
+    if 'left' in tokenize(data.instructions[0]):
+        assert 'right' in tokenize(buffer.instructions[1])
 
 
 def test_tiny_run_learns_and_writes_a_checkpoint(tmp_path):
-    """1024 episodes (a few seconds) lift PQ on 30 unseen generated maps well above the same
+    """
+    Check that 1024 episodes lift PQ well above the untrained model.
+
+    1024 episodes (a few seconds) lift PQ on 30 unseen generated maps well above the same
     model untrained: the same run with 0 episodes, which starts from the same seeded weights
     and evaluates on the same maps (PQ about 0 untrained, 0.77 trained). MSE must fall too:
     PQ alone also rises when only the puddles' -1 is learned (with the goal's +3 never
-    regressed, PQ still reached 0.73 while MSE rose from 1.70 to 1.83; trained: 1.20)."""
-    train, test = generate(60, seed=1, mode="local"), generate(30, seed=2, mode="local")
+    regressed, PQ still reached 0.73 while MSE rose from 1.70 to 1.83; trained: 1.20).
+    """
+    train, test = generate(60, seed=1, mode='local'), generate(30, seed=2, mode='local')
     runs = {}
     for episodes in (0, 1024):
         cfg = RLConfig(episodes=episodes, envs=64, updates_per_round=8, batch_maps=32, seed=0)
-        runs[episodes] = train_rl("generator-local", "t-cnn", "", tmp_path / str(episodes), cfg,
-                                  train, test, progress=False)
+        runs[episodes] = train_rl(
+            'generator-local',
+            't-cnn',
+            '',
+            tmp_path / str(episodes),
+            cfg,
+            train,
+            test,
+            progress=False,
+        )
     (_, untrained), (path, summary) = runs[0], runs[1024]
-    assert untrained["transitions"] == 0 and untrained["test"]["n"] == summary["test"]["n"] == 30
-    assert summary["episodes"] == 1024 and summary["maps_seen"] <= 60
-    assert summary["transitions"] >= 1024
-    trained, before = summary["test"], untrained["test"]
-    assert trained["pq"] > before["pq"] + 0.4, (trained, before)
-    assert trained["mse"] < before["mse"] - 0.3, (trained, before)
-    assert trained["md"] < before["md"]
+    assert untrained['transitions'] == 0 and untrained['test']['n'] == summary['test']['n'] == 30
+    assert summary['episodes'] == 1024 and summary['maps_seen'] <= 60
+    assert summary['transitions'] >= 1024
+    trained, before = summary['test'], untrained['test']
+    assert trained['pq'] > before['pq'] + 0.4, (trained, before)
+    assert trained['mse'] < before['mse'] - 0.3, (trained, before)
+    assert trained['md'] < before['md']
     loaded = load_checkpoint(path)
-    assert loaded.name == "t-cnn" and loaded.header["training"].startswith("rl")
+    assert loaded.name == 't-cnn' and loaded.header['training'].startswith('rl')
 
 
 def test_rl_train_via_ros_equals_the_in_process_run(tmp_path, capsys):
-    """`rl-train --via-ros` (episodes from a gridworld node process, over topics) learns
+    """
+    Check that `rl-train --via-ros` learns exactly what the in-process loop learns.
+
+    `rl-train --via-ros` (episodes from a gridworld node process, over topics) learns
     exactly what the in-process loop learns from the same episodes: the node's environment
     is seeded with --seed and plays one episode when it starts (which the client skips with
     next_episode), so an in-process environment seeded alike, after one reset, serves the
-    same maps, starts and rewards; every transition, metric and weight must then agree."""
-    code = cli.main(["rl-train", "--task", "generator-local", "--model", "t-cnn", "--via-ros",
-                     "--episodes", "6", "--step-limit", "10", "--generated", "20",
-                     "--out", str(tmp_path / "ros"), "--quiet"])
+    same maps, starts and rewards; every transition, metric and weight must then agree.
+    """
+    code = cli.main(
+        [
+            'rl-train',
+            '--task',
+            'generator-local',
+            '--model',
+            't-cnn',
+            '--via-ros',
+            '--episodes',
+            '6',
+            '--step-limit',
+            '10',
+            '--generated',
+            '20',
+            '--out',
+            str(tmp_path / 'ros'),
+            '--quiet',
+        ]
+    )
     assert code == 0
     via_ros = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert via_ros["episodes"] == 6
-    assert 6 <= via_ros["transitions"] <= 60
+    assert via_ros['episodes'] == 6
+    assert 6 <= via_ros['transitions'] <= 60
 
-    train = load_episodes("generator-local", n=20, seed=0)       # as rl-train makes them
-    test = load_episodes("generator-local", n=50, seed=1000)
+    train = load_episodes('generator-local', n=20, seed=0)  # as rl-train makes them
+    test = load_episodes('generator-local', n=50, seed=1000)
     env = GridWorldEnv(train, step_limit=10)
-    env.rng = np.random.default_rng(0)                            # as the node seeds it
-    env.reset()                                                    # the node's first episode
+    env.rng = np.random.default_rng(0)  # as the node seeds it
+    env.reset()  # the node's first episode
     cfg = RLConfig(episodes=6, step_limit=10, seed=0, threads=1)
-    path, in_process = train_rl("generator-local", "t-cnn", "", tmp_path / "local", cfg, train,
-                                test, envs=[env], progress=False)
-    for key in ("episodes", "transitions", "maps_seen", "updates", "test", "rl_config"):
+    path, in_process = train_rl(
+        'generator-local',
+        't-cnn',
+        '',
+        tmp_path / 'local',
+        cfg,
+        train,
+        test,
+        envs=[env],
+        progress=False,
+    )
+    for key in ('episodes', 'transitions', 'maps_seen', 'updates', 'test', 'rl_config'):
         assert via_ros[key] == in_process[key], key
-    ros_weights = load_checkpoint(tmp_path / "ros" / "rl_generator-local_t-cnn.pt").model.state_dict()
+    ros_weights = load_checkpoint(
+        tmp_path / 'ros' / 'rl_generator-local_t-cnn.pt'
+    ).model.state_dict()
     for name, weights in load_checkpoint(path).model.state_dict().items():
         torch.testing.assert_close(ros_weights[name], weights, rtol=0, atol=0)
 
 
 def test_reproduce_rl_keeps_rows_of_earlier_runs(data_dir, tmp_path):
     """A run over some tasks replaces its own rows of rl.json and keeps the others."""
-    earlier = {"task": "isi", "model": "t-cnn", "test": {"pq": 0.5, "md": 3.0, "mse": 1.0, "n": 1},
-               "episodes": 1, "train_seconds": 1.0}
-    (tmp_path / "rl.json").write_text(json.dumps({"results": [earlier]}))
-    reproduce_rl(str(data_dir), str(tmp_path), tasks=("pw-local",), models=("t-cnn",),
-                 scale=1e-4, jobs=1, checkpoints=str(tmp_path))
-    rows = json.loads((tmp_path / "rl.json").read_text())["results"]
-    assert [(r["task"], r["model"]) for r in rows] == [("pw-local", "t-cnn"), ("isi", "t-cnn")]
-    assert rows[0]["episodes"] == 1 and rows[0]["test"]["n"] == 399
-    table = (tmp_path / "rl.md").read_text()
-    assert "| pw-local | t-cnn |" in table and "| isi | t-cnn | 0.50 | 0.74 |" in table
+    earlier = {
+        'task': 'isi',
+        'model': 't-cnn',
+        'test': {'pq': 0.5, 'md': 3.0, 'mse': 1.0, 'n': 1},
+        'episodes': 1,
+        'train_seconds': 1.0,
+    }
+    (tmp_path / 'rl.json').write_text(json.dumps({'results': [earlier]}))
+    reproduce_rl(
+        str(data_dir),
+        str(tmp_path),
+        tasks=('pw-local',),
+        models=('t-cnn',),
+        scale=1e-4,
+        jobs=1,
+        checkpoints=str(tmp_path),
+    )
+    rows = json.loads((tmp_path / 'rl.json').read_text())['results']
+    assert [(r['task'], r['model']) for r in rows] == [('pw-local', 't-cnn'), ('isi', 't-cnn')]
+    assert rows[0]['episodes'] == 1 and rows[0]['test']['n'] == 399
+    table = (tmp_path / 'rl.md').read_text()
+    assert '| pw-local | t-cnn |' in table and '| isi | t-cnn | 0.50 | 0.74 |' in table

@@ -1,25 +1,33 @@
-"""config/, launch/ and rviz/ checked without ROS launch or RViz (not on PyPI): the entity
-tables are the core's; each shipped params file holds every parameter its node declares,
-with the declared default, keyed so that it applies in any namespace, and loads with
-rclpy's parser; the launch files declare the arguments the README uses and start our nodes
-with those params files; the RViz config shows our topics. Config files are found from a
-path or by name."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+config/, launch/ and rviz/ checked without ROS launch or RViz (not on PyPI).
+
+The entity tables are the core's; each shipped params file holds every parameter its node declares,
+with the declared default, keyed so that it applies in any namespace, and loads with rclpy's
+parser; the launch files declare the arguments the README uses and start our nodes with those
+params files; the RViz config shows our topics. Config files are found from a path or by name.
+"""
+
 import ast
 from pathlib import Path
 import re
 
 import pytest
-import yaml
-
 from spatial_grounding_ros.entities import EntityTable, ISI, PUDDLEWORLD
 from spatial_grounding_ros.ros.package_files import find_config
+import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 SHARE = {'call': 'get_package_share_directory', 'args': ['spatial_grounding_ros']}
 
 
 def lc(name: str) -> dict:
-    """A LaunchConfiguration(name), as launch_calls() reads it."""
+    """Return a LaunchConfiguration(name), as launch_calls() reads it."""
     return {'call': 'LaunchConfiguration', 'args': [name]}
 
 
@@ -32,18 +40,24 @@ def node_parameters(node_module: str):
     return module.NODE_NAME, module.PARAMETERS
 
 
-@pytest.mark.parametrize('name, table', [('entities_puddleworld.yaml', PUDDLEWORLD),
-                                         ('entities_isi.yaml', ISI)])
+@pytest.mark.parametrize(
+    'name, table', [('entities_puddleworld.yaml', PUDDLEWORLD), ('entities_isi.yaml', ISI)]
+)
 def test_entity_tables_are_the_core_tables(name, table):
     assert EntityTable.from_yaml(REPO / 'config' / name) == table
 
 
-@pytest.mark.parametrize('file, node_module', [('grounder.yaml', 'grounder_node'),
-                                               ('gridworld.yaml', 'gridworld_node')])
+@pytest.mark.parametrize(
+    'file, node_module', [('grounder.yaml', 'grounder_node'), ('gridworld.yaml', 'gridworld_node')]
+)
 def test_params_file_holds_every_declared_parameter_for_any_namespace(file, node_module):
-    """The shipped file is the node's declared defaults, keyed /**/<node> so that it applies
+    """
+    Check that the shipped file is the node's declared defaults.
+
+    The shipped file is the node's declared defaults, keyed /**/<node> so that it applies
     under -r __ns:=/robot1 too (test_ros_parameters starts nodes that way), and rclpy's own
-    parser reads it to the same values."""
+    parser reads it to the same values.
+    """
     from rclpy.parameter import parameter_dict_from_yaml_file, parameter_value_to_python
 
     name, parameters = node_parameters(node_module)
@@ -67,8 +81,9 @@ def test_find_config_by_path_and_by_name(tmp_path):
     own = tmp_path / 'mine.yaml'
     own.write_text('x: 1\n')
     assert find_config(own) == own
-    assert find_config('grounder.yaml').read_text() == (REPO / 'config' /
-                                                        'grounder.yaml').read_text()
+    assert (
+        find_config('grounder.yaml').read_text() == (REPO / 'config' / 'grounder.yaml').read_text()
+    )
     with pytest.raises(FileNotFoundError, match='no_such.yaml: config file not found'):
         find_config('no_such.yaml')
 
@@ -78,17 +93,33 @@ def test_find_config_by_path_and_by_name(tmp_path):
 
 
 def launch_calls(name: str) -> dict:
-    """A launch file's generate_launch_description() as plain data, from its syntax tree:
-    every call becomes {'call': name, 'args': [...], **keywords}, names resolve to their
-    module-level or local assignments, os.path.join to {'join': [parts]}, dicts to dicts."""
+    """
+    Return a launch file's generate_launch_description() as plain data, from its syntax tree.
+
+    Every call becomes {'call': name, 'args': [...], **keywords}, names resolve to their
+    module-level or local assignments, os.path.join to {'join': [parts]}, dicts to dicts.
+    """
     path = REPO / 'launch' / name
     tree = ast.parse(path.read_text(), str(path))
-    names = {t.id: node.value for node in tree.body if isinstance(node, ast.Assign)
-             for t in node.targets}
-    [function] = [n for n in tree.body if isinstance(n, ast.FunctionDef)
-                  and n.name == 'generate_launch_description']
-    names.update({t.id: node.value for node in function.body if isinstance(node, ast.Assign)
-                  for t in node.targets})
+    names = {
+        t.id: node.value
+        for node in tree.body
+        if isinstance(node, ast.Assign)
+        for t in node.targets
+    }
+    [function] = [
+        n
+        for n in tree.body
+        if isinstance(n, ast.FunctionDef) and n.name == 'generate_launch_description'
+    ]
+    names.update(
+        {
+            t.id: node.value
+            for node in function.body
+            if isinstance(node, ast.Assign)
+            for t in node.targets
+        }
+    )
 
     def value(node):
         if isinstance(node, ast.Constant):
@@ -106,8 +137,11 @@ def launch_calls(name: str) -> dict:
             func = ast.unparse(node.func)
             if func == 'os.path.join':
                 return {'join': [value(a) for a in node.args]}
-            return {'call': func, 'args': [value(a) for a in node.args],
-                    **{k.arg: value(k.value) for k in node.keywords}}
+            return {
+                'call': func,
+                'args': [value(a) for a in node.args],
+                **{k.arg: value(k.value) for k in node.keywords},
+            }
         raise AssertionError(f'unexpected launch file syntax: {ast.unparse(node)}')
 
     [ret] = [n for n in function.body if isinstance(n, ast.Return)]
@@ -127,13 +161,19 @@ def launch_parts(name: str):
 
 
 def check_our_node(node: dict, executable: str, params_argument: str) -> dict:
-    """A Node of our package: the console script, the name its params file is keyed by,
-    the namespace argument, the params file then the launch-argument overrides (names the
-    node declares), and the log level. Returns the overrides."""
+    """
+    Return a Node of our package.
+
+    The console script, the name its params file is keyed by, the namespace argument, the params
+    file then the launch-argument overrides (names the node declares), and the log level. Returns
+    the overrides.
+    """
     name, parameters = node_parameters(f'{executable}_node')
     assert node['package'] == 'spatial_grounding_ros' and node['executable'] == executable
-    assert f'{executable} = spatial_grounding_ros.ros.{executable}_node:main' in \
-        (REPO / 'setup.py').read_text()
+    assert (
+        f'{executable} = spatial_grounding_ros.ros.{executable}_node:main'
+        in (REPO / 'setup.py').read_text()
+    )
     params = yaml.safe_load(find_config(f'{executable}.yaml').read_text())
     assert node['name'] == name and set(params) == {f'/**/{name}'}
     assert node['namespace'] == lc('namespace')
@@ -151,14 +191,20 @@ def check_default_params_file(argument: dict, file: str) -> None:
 
 
 def test_grounder_launch_file_arguments_and_node():
-    """`ros2 launch spatial_grounding_ros grounder.launch.py namespace:=... use_sim_time:=...
-    log_level:=... autostart:=... params_file:=...` reach the grounder."""
+    """
+    `ros2 launch spatial_grounding_ros grounder.launch.py namespace:=...
+
+    use_sim_time:=... log_level:=... autostart:=... params_file:=...` reach the grounder.
+    """
     arguments, [node] = launch_parts('grounder.launch.py')
-    assert set(arguments) == {'namespace', 'params_file', 'use_sim_time', 'autostart',
-                              'log_level'}
+    assert set(arguments) == {'namespace', 'params_file', 'use_sim_time', 'autostart', 'log_level'}
     defaults = {k: a['default_value'] for k, a in arguments.items() if k != 'params_file'}
-    assert defaults == {'namespace': '', 'use_sim_time': 'false', 'autostart': 'true',
-                        'log_level': 'info'}
+    assert defaults == {
+        'namespace': '',
+        'use_sim_time': 'false',
+        'autostart': 'true',
+        'log_level': 'info',
+    }
     check_default_params_file(arguments['params_file'], 'grounder.yaml')
     overrides = check_our_node(node, 'grounder', 'params_file')
     assert overrides == {'use_sim_time': lc('use_sim_time'), 'autostart': lc('autostart')}
@@ -166,8 +212,14 @@ def test_grounder_launch_file_arguments_and_node():
 
 def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
     arguments, nodes = launch_parts('demo.launch.py')
-    assert set(arguments) == {'namespace', 'grounder_params_file', 'gridworld_params_file',
-                              'use_sim_time', 'log_level', 'rviz'}
+    assert set(arguments) == {
+        'namespace',
+        'grounder_params_file',
+        'gridworld_params_file',
+        'use_sim_time',
+        'log_level',
+        'rviz',
+    }
     assert arguments['rviz']['default_value'] == 'false'
     check_default_params_file(arguments['grounder_params_file'], 'grounder.yaml')
     check_default_params_file(arguments['gridworld_params_file'], 'gridworld.yaml')
@@ -186,8 +238,12 @@ def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
 
 
 def test_readme_launch_lines_use_the_declared_arguments():
-    """Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README passes
-    only arguments X declares (and the README shows both launch files)."""
+    """
+    Check the README's `ros2 launch` lines against the launch files' arguments.
+
+    Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README passes
+    only arguments X declares (and the README shows both launch files).
+    """
     seen = set()
     for line in (REPO / 'README.md').read_text().splitlines():
         match = re.match(r'ros2 launch spatial_grounding_ros (\S+\.launch\.py)(.*)', line)
@@ -203,13 +259,13 @@ def test_readme_launch_lines_use_the_declared_arguments():
 
 # --- rviz/spatial_grounding.rviz
 
+
 def test_rviz_config_shows_the_maps_goal_and_agent_on_relative_topics():
     config = yaml.safe_load((REPO / 'rviz' / 'spatial_grounding.rviz').read_text())
     manager = config['Visualization Manager']
     assert manager['Global Options']['Fixed Frame'] == 'map'
     displays = {d['Topic']['Value']: d for d in manager['Displays'] if 'Topic' in d}
-    assert set(displays) == {'entity_map', 'value_map', 'relation_map', 'goal_pose',
-                             'agent_pose'}
+    assert set(displays) == {'entity_map', 'value_map', 'relation_map', 'goal_pose', 'agent_pose'}
     for topic in ('entity_map', 'value_map', 'relation_map'):
         d = displays[topic]
         assert d['Class'] == 'rviz_default_plugins/Map'

@@ -1,5 +1,15 @@
-"""Message conversion (ros/convert.py): orientation, scaling, layouts and input checks.
-Pure functions over message types: no node, no DDS."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Message conversion (ros/convert.py): orientation, scaling, layouts and input checks.
+
+Pure functions over message types: no node, no DDS.
+"""
+
 import math
 
 import numpy as np
@@ -7,9 +17,8 @@ import pytest
 
 pytest.importorskip('nav_msgs.msg', reason='ROS 2 message packages are not installed')
 
-from std_msgs.msg import Header  # noqa: E402
-
 from spatial_grounding_ros.ros import convert  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
 
 HEADER = Header(frame_id='map')
 
@@ -70,14 +79,19 @@ def test_value_map_is_scaled_to_0_100_in_grid_order():
     values = np.array([[3.0, -1.0], [1.0, 0.0]])  # row 0 = north
     msg = convert.value_map_to_occupancy_grid(values, HEADER, convert.map_info((2, 2)))
     assert list(msg.data) == [50, 25, 100, 0]
-    flat = convert.value_map_to_occupancy_grid(np.full((2, 2), 7.0), HEADER,
-                                               convert.map_info((2, 2)))
+    flat = convert.value_map_to_occupancy_grid(
+        np.full((2, 2), 7.0), HEADER, convert.map_info((2, 2))
+    )
     assert list(flat.data) == [0, 0, 0, 0]
 
 
 def test_cost_encoding_puts_the_best_cell_at_0_as_a_costmap_reads_it():
-    """`value_map_encoding: cost`: the reverse of the display scale, best 0, worst 100
-    (lethal), so a planner reading value_map as a costmap is drawn to the goal."""
+    """
+    `value_map_encoding: cost`.
+
+    The reverse of the display scale, best 0, worst 100 (lethal), so a planner reading value_map as
+    a costmap is drawn to the goal.
+    """
     values = np.array([[3.0, -1.0], [1.0, 0.0]])  # row 0 = north
     info = convert.map_info((2, 2))
     cost = convert.value_map_to_occupancy_grid(values, HEADER, info, encoding='cost')
@@ -107,15 +121,18 @@ def test_float32_multiarray_layout_matches_the_occupancy_grid_order():
     np.testing.assert_array_equal(convert.float32_multiarray_to_value_map(msg), values)
 
 
-@pytest.mark.parametrize('change, problem', [
-    (dict(width=0), 'width and height must be positive'),
-    (dict(height=0), 'width and height must be positive'),
-    (dict(width=300, height=300), 'more than max_cells'),
-    (dict(resolution=float('nan')), 'resolution nan'),
-    (dict(resolution=0.0), 'resolution 0.0'),
-    (dict(resolution=-1.0), 'resolution -1.0'),
-    (dict(resolution=float('inf')), 'resolution inf'),
-])
+@pytest.mark.parametrize(
+    'change, problem',
+    [
+        ({'width': 0}, 'width and height must be positive'),
+        ({'height': 0}, 'width and height must be positive'),
+        ({'width': 300, 'height': 300}, 'more than max_cells'),
+        ({'resolution': float('nan')}, 'resolution nan'),
+        ({'resolution': 0.0}, 'resolution 0.0'),
+        ({'resolution': -1.0}, 'resolution -1.0'),
+        ({'resolution': float('inf')}, 'resolution inf'),
+    ],
+)
 def test_bad_map_info_is_named(change, problem):
     msg = convert.grid_to_occupancy_grid(np.zeros((3, 3), int), HEADER)
     for key, value in change.items():

@@ -1,67 +1,94 @@
-"""The reference suite: its numbers are the Python API's answers on the same worlds, its
-JSON has the documented shape, it writes the failure PNGs, and bad options are one line."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The reference suite.
+
+Its numbers are the Python API's answers on the same worlds, its JSON has the documented shape, it
+writes the failure PNGs, and bad options are one line.
+"""
+
 import json
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import suite
 from spatial_grounding_ros.generator import FAMILIES, family_goals
 from spatial_grounding_ros.grounder import Grounder
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "spatial_grounding_ros.cli", *args],
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, '-m', 'spatial_grounding_ros.cli', *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_suite_hit_and_md_are_the_grounders_answers(tmp_path):
     """Recompute hit and MD per family with Grounder.ground, one world at a time."""
-    result = suite.run_suite("pw-local_t-cnn", sizes=(7, 12), n=4, seed=5, out=tmp_path,
-                             progress=False)
-    grounder = Grounder.from_checkpoint("pw-local_t-cnn")
+    result = suite.run_suite(
+        'pw-local_t-cnn', sizes=(7, 12), n=4, seed=5, out=tmp_path, progress=False
+    )
+    grounder = Grounder.from_checkpoint('pw-local_t-cnn')
     all_d = []
     for family in FAMILIES:
         for size in (7, 12):
-            d = [abs(grounder.ground(g, t).goal[0] - goal[0]) + abs(grounder.ground(g, t).goal[1] - goal[1])
-                 for g, t, goal in suite.suite_worlds(family, size, 4, 5)]
-            got = result["families"][family][str(size)]
-            assert got == {"hit": np.mean(np.array(d) == 0), "md": np.mean(d), "n": 4}, (family, size)
+            d = [
+                abs(grounder.ground(g, t).goal[0] - goal[0])
+                + abs(grounder.ground(g, t).goal[1] - goal[1])
+                for g, t, goal in suite.suite_worlds(family, size, 4, 5)
+            ]
+            got = result['families'][family][str(size)]
+            assert got == {'hit': np.mean(np.array(d) == 0), 'md': np.mean(d), 'n': 4}, (
+                family,
+                size,
+            )
             all_d += d
-    assert result["n"] == len(all_d) == 2 * 4 * len(FAMILIES)
-    assert result["hit"] == pytest.approx(np.mean(np.array(all_d) == 0))
-    assert result["md"] == pytest.approx(np.mean(all_d))
-    assert set(result["groups"]) == {"local", "global", "compositional"}
-    written = json.loads((tmp_path / "suite.json").read_text())
-    assert written["families"] == result["families"]
+    assert result['n'] == len(all_d) == 2 * 4 * len(FAMILIES)
+    assert result['hit'] == pytest.approx(np.mean(np.array(all_d) == 0))
+    assert result['md'] == pytest.approx(np.mean(all_d))
+    assert set(result['groups']) == {'local', 'global', 'compositional'}
+    written = json.loads((tmp_path / 'suite.json').read_text())
+    assert written['families'] == result['families']
     # the untrained-for-this t-CNN misses somewhere, so there are failure pictures
-    assert result["failure_plots"] and all((tmp_path / p.split("/")[-1]).is_file()
-                                           for p in result["failure_plots"])
+    assert result['failure_plots'] and all(
+        (tmp_path / p.split('/')[-1]).is_file() for p in result['failure_plots']
+    )
 
 
 def test_suite_worlds_are_the_family_and_size_asked_for():
     for family in FAMILIES:
         for grid, text, goal in suite.suite_worlds(family, 9, 3, seed=0):
             assert grid.shape == (9, 9)
-            if family not in ("row-col", "between"):
+            if family not in ('row-col', 'between'):
                 assert (text, goal) in family_goals(grid, family)
 
 
 def test_suite_json_cli_prints_one_object():
-    r = run("suite", "--checkpoint", "pw-local_t-cnn", "--sizes", "6", "--n", "2", "--json")
+    r = run('suite', '--checkpoint', 'pw-local_t-cnn', '--sizes', '6', '--n', '2', '--json')
     assert r.returncode == 0, r.stderr
     result = json.loads(r.stdout)
-    assert {"hit", "md", "n", "families"} <= set(result)
-    assert set(result["families"]) == set(FAMILIES)
-    assert result["families"]["between"]["6"]["n"] == 2
+    assert {'hit', 'md', 'n', 'families'} <= set(result)
+    assert set(result['families']) == set(FAMILIES)
+    assert result['families']['between']['6']['n'] == 2
 
 
-@pytest.mark.parametrize("args,needle", [(("--sizes", "4"), "sizes must be >= 5"),
-                                         (("--n", "0"), "--n must be at least 1"),
-                                         (("--checkpoint", "isi_t-cnn"), "entity table")])
+@pytest.mark.parametrize(
+    'args,needle',
+    [
+        (('--sizes', '4'), 'sizes must be >= 5'),
+        (('--n', '0'), '--n must be at least 1'),
+        (('--checkpoint', 'isi_t-cnn'), 'entity table'),
+    ],
+)
 def test_bad_suite_options_are_one_line(args, needle):
-    r = run("suite", *args, "--json")
+    r = run('suite', *args, '--json')
     assert r.returncode == 2
     assert needle in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr

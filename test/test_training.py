@@ -1,45 +1,76 @@
-"""Supervised training's README rules, on real (tiny) training runs: the kept epoch is the
-second half's best validation PQ (ties: MSE), `--select mse` the lowest validation MSE of all
-epochs; validation holds out whole PuddleWorld worlds."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Supervised training's README rules, on real (tiny) training runs.
+
+The kept epoch is the second half's best validation PQ (ties: MSE), `--select mse` the lowest
+validation MSE of all epochs; validation holds out whole PuddleWorld worlds.
+"""
+
 import numpy as np
 import pytest
-
 from spatial_grounding_ros import datasets
 from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.training import TrainConfig, train_supervised
+from spatial_grounding_ros.training import train_supervised, TrainConfig
 
 EPOCHS = 6
 
 
 def tiny_run(tmp_path, seed: int, select: str) -> dict:
-    """6 epochs of t-CNN on 160 generated worlds (no data download), at lr 0.05: too large
-    on purpose, so that validation swings from epoch to epoch as it does early in a real
-    run, and the epochs the rules pick differ. Returns the checkpoint's header."""
-    tc = TrainConfig(epochs=EPOCHS, batch_size=16, lr=0.05, synthetic=0, mirrors=False,
-                     world_instructions=False, goal_weight=0.0,
-                     select=select, seed=seed, threads=1)
-    path, summary = train_supervised("pw-local", "t-cnn", "", tmp_path / f"{select}{seed}", tc,
-                                     train_data=generate(160, seed=seed, mode="local"),
-                                     progress=False)
+    """
+    6 epochs of t-CNN on 160 generated worlds (no data download), at lr 0.05.
+
+    Too large on purpose, so that validation swings from epoch to epoch as it does early in a real
+    run, and the epochs the rules pick differ. Returns the checkpoint's header.
+    """
+    tc = TrainConfig(
+        epochs=EPOCHS,
+        batch_size=16,
+        lr=0.05,
+        synthetic=0,
+        mirrors=False,
+        world_instructions=False,
+        goal_weight=0.0,
+        select=select,
+        seed=seed,
+        threads=1,
+    )
+    path, summary = train_supervised(
+        'pw-local',
+        't-cnn',
+        '',
+        tmp_path / f'{select}{seed}',
+        tc,
+        train_data=generate(160, seed=seed, mode='local'),
+        progress=False,
+    )
     header = load_checkpoint(path).header
-    assert header["best_epoch"] == summary["best_epoch"]
+    assert header['best_epoch'] == summary['best_epoch']
     # the weights kept are the chosen epoch's: evaluated again, they give its history entry
-    _, val_mse, val_pq, _ = header["loss_history"][header["best_epoch"]]  # gen. HIT: 0, none here
-    assert round(header["val_metrics"]["mse"], 5) == val_mse
-    assert round(header["val_metrics"]["pq"], 5) == val_pq
+    _, val_mse, val_pq, _ = header['loss_history'][header['best_epoch']]  # gen. HIT: 0, none here
+    assert round(header['val_metrics']['mse'], 5) == val_mse
+    assert round(header['val_metrics']['pq'], 5) == val_pq
     return header
 
 
 def test_kept_epoch_is_the_second_halfs_best_validation_pq_or_the_lowest_mse(tmp_path):
-    """On runs whose best PQ of all epochs falls in the first half (found among the first
+    """
+    Check which epoch is kept when the best PQ falls in the first half.
+
+    On runs whose best PQ of all epochs falls in the first half (found among the first
     seeds), the kept epoch is still the second half's best PQ; with --select mse, on a run
-    whose lowest MSE falls in the first half, that first-half epoch is kept."""
-    seen = {"pq": False, "mse": False}
+    whose lowest MSE falls in the first half, that first-half epoch is kept.
+    """
+    seen = {'pq': False, 'mse': False}
     for seed in range(6):
-        pq_run, mse_run = tiny_run(tmp_path, seed, "pq"), tiny_run(tmp_path, seed, "mse")
-        history = pq_run["loss_history"]
-        assert mse_run["loss_history"] == history  # selection does not change training
+        pq_run, mse_run = tiny_run(tmp_path, seed, 'pq'), tiny_run(tmp_path, seed, 'mse')
+        history = pq_run['loss_history']
+        assert mse_run['loss_history'] == history  # selection does not change training
         mses, pqs = [h[1] for h in history], [h[2] for h in history]
         # --select pq: the best validation PQ + generated HIT (no generated worlds here: 0)
         # among epochs 3..5, the lower MSE among equal scores
@@ -47,21 +78,25 @@ def test_kept_epoch_is_the_second_halfs_best_validation_pq_or_the_lowest_mse(tmp
         second = range(EPOCHS // 2, EPOCHS)
         best = max(scores[e] for e in second)
         tied = [e for e in second if scores[e] == best]
-        assert pq_run["best_epoch"] == min(tied, key=lambda e: mses[e])
+        assert pq_run['best_epoch'] == min(tied, key=lambda e: mses[e])
         # --select mse: the lowest MSE of all epochs
-        assert mse_run["best_epoch"] == int(np.argmin(mses))
-        seen["pq"] |= int(np.argmax(pqs)) < EPOCHS // 2
-        seen["mse"] |= int(np.argmin(mses)) < EPOCHS // 2
+        assert mse_run['best_epoch'] == int(np.argmin(mses))
+        seen['pq'] |= int(np.argmax(pqs)) < EPOCHS // 2
+        seen['mse'] |= int(np.argmin(mses)) < EPOCHS // 2
         if all(seen.values()):
             break
-    assert all(seen.values()), f"no run told the rules apart: {seen}"
+    assert all(seen.values()), f'no run told the rules apart: {seen}'
 
 
-@pytest.mark.parametrize("task, worlds", [("pw-local", 54), ("pw-global", 117), ("pw", 171)])
+@pytest.mark.parametrize('task, worlds', [('pw-local', 54), ('pw-global', 117), ('pw', 171)])
 def test_puddleworld_validation_holds_out_whole_worlds(data_dir, task, worlds):
-    """README: validation is 10% of the training *worlds*, and no map is shared with
-    training: every instruction of a world falls on one side."""
-    data = datasets.load_task(task, "train", data_dir)
+    """
+    Check a claim of the README.
+
+    README: validation is 10% of the training *worlds*, and no map is shared with training: every
+    instruction of a world falls on one side.
+    """
+    data = datasets.load_task(task, 'train', data_dir)
     assert len(set(data.worlds)) == worlds
     train, val = datasets.split_by_world(data, 0.1, seed=0)
     assert len(train) + len(val) == len(data)
@@ -72,11 +107,16 @@ def test_puddleworld_validation_holds_out_whole_worlds(data_dir, task, worlds):
 
 def test_training_validates_on_the_world_split(data_dir, tmp_path):
     """train_supervised's validation set is split_by_world's (one epoch on PW local)."""
-    tc = TrainConfig(epochs=1, synthetic=0, mirrors=False, world_instructions=False, seed=2,
-                     threads=1)
-    path, summary = train_supervised("pw-local", "t-cnn", data_dir, tmp_path, tc, progress=False)
-    train, val = datasets.split_by_world(datasets.load_task("pw-local", "train", data_dir), 0.1,
-                                         seed=2)
-    assert (summary["train_examples"], summary["val_examples"]) == (len(train), len(val))
-    assert load_checkpoint(path).header["training_data"].endswith(
-        f"({len(train)} train / {len(val)} validation, by world)")
+    tc = TrainConfig(
+        epochs=1, synthetic=0, mirrors=False, world_instructions=False, seed=2, threads=1
+    )
+    path, summary = train_supervised('pw-local', 't-cnn', data_dir, tmp_path, tc, progress=False)
+    train, val = datasets.split_by_world(
+        datasets.load_task('pw-local', 'train', data_dir), 0.1, seed=2
+    )
+    assert (summary['train_examples'], summary['val_examples']) == (len(train), len(val))
+    assert (
+        load_checkpoint(path)
+        .header['training_data']
+        .endswith(f'({len(train)} train / {len(val)} validation, by world)')
+    )

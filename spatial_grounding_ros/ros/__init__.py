@@ -1,2 +1,11 @@
-"""ROS 2 adapters: message conversion, the grounder and gridworld nodes, bag I/O.
-The only part of the package that imports rclpy and message types."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+ROS 2 adapters: message conversion, the grounder and gridworld nodes, bag I/O.
+
+The only part of the package that imports rclpy and message types.
+"""

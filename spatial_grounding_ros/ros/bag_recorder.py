@@ -1,4 +1,11 @@
-"""Record topics to a rosbag2 MCAP bag without the ros2 CLI, as `ros2 bag record` would.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Record topics to a rosbag2 MCAP bag without the ros2 CLI, as `ros2 bag record` would.
 
 Subscriptions with raw=True hand over the serialized CDR bytes, which bags.BagWriter stores
 unchanged. Each message's log_time is its reception time from the middleware (the message
@@ -10,6 +17,7 @@ its first message arrives. Latched topics are subscribed transient local.
 RecordingThread runs a recorder in an executor thread of its own, so that it does nothing
 but record while the caller's thread does other work (the demo draws PNGs).
 """
+
 from __future__ import annotations
 
 import importlib
@@ -23,8 +31,9 @@ from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from ..bags import BagWriter, duration
 
-LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+LATCHED_QOS = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
 STREAM_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
@@ -35,29 +44,44 @@ def message_class(msgtype: str):
 
 
 def offered_qos(endpoint: TopicEndpointInfo):
-    """A publisher's QoS as the graph reports it (history and depth are not discovered:
-    'unknown' and 0, as `ros2 bag record` stores them too) -> a rosbags Qos."""
-    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
-                                    QosReliability)
+    """
+    Return a publisher's QoS as the graph reports it.
+
+    A publisher's QoS as the graph reports it (history and depth are not discovered:
+    'unknown' and 0, as `ros2 bag record` stores them too) -> a rosbags Qos.
+    """
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability
 
     q = endpoint.qos_profile
     # rclpy's and rosbags' policy enums share their member names
-    return Qos(history=QosHistory[q.history.name], depth=q.depth,
-               reliability=QosReliability[q.reliability.name],
-               durability=QosDurability[q.durability.name],
-               deadline=duration(q.deadline.nanoseconds),
-               lifespan=duration(q.lifespan.nanoseconds),
-               liveliness=QosLiveliness[q.liveliness.name],
-               liveliness_lease_duration=duration(q.liveliness_lease_duration.nanoseconds),
-               avoid_ros_namespace_conventions=q.avoid_ros_namespace_conventions)
+    return Qos(
+        history=QosHistory[q.history.name],
+        depth=q.depth,
+        reliability=QosReliability[q.reliability.name],
+        durability=QosDurability[q.durability.name],
+        deadline=duration(q.deadline.nanoseconds),
+        lifespan=duration(q.lifespan.nanoseconds),
+        liveliness=QosLiveliness[q.liveliness.name],
+        liveliness_lease_duration=duration(q.liveliness_lease_duration.nanoseconds),
+        avoid_ros_namespace_conventions=q.avoid_ros_namespace_conventions,
+    )
 
 
 class BagRecorder(Node):
-    """Writes every message of `topics` ({name: 'pkg/msg/Type'}) to a new bag at `path`;
-    names in `latched` are subscribed transient local."""
+    """
+    Writes every message of `topics` ({name: 'pkg/msg/Type'}) to a new bag at `path`.
 
-    def __init__(self, path: str | Path, topics: dict[str, str], latched: set[str] = frozenset(),
-                 node_name: str = 'bag_recorder', **node_options):
+    Names in `latched` are subscribed transient local.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        topics: dict[str, str],
+        latched: set[str] = frozenset(),
+        node_name: str = 'bag_recorder',
+        **node_options,
+    ):
         super().__init__(node_name, **node_options)
         self.bag = BagWriter(path, latched={self.resolve_topic_name(t) for t in latched})
         self.bag.__enter__()
@@ -65,10 +89,14 @@ class BagRecorder(Node):
         for topic, msgtype in topics.items():
             full = self.resolve_topic_name(topic)
             self.create_subscription(
-                message_class(msgtype), topic,
-                lambda data, info, full=full, msgtype=msgtype: self.record(full, msgtype,
-                                                                           data, info),
-                LATCHED_QOS if topic in latched else STREAM_QOS, raw=True)
+                message_class(msgtype),
+                topic,
+                lambda data, info, full=full, msgtype=msgtype: self.record(
+                    full, msgtype, data, info
+                ),
+                LATCHED_QOS if topic in latched else STREAM_QOS,
+                raw=True,
+            )
 
     def record(self, topic: str, msgtype: str, data: bytes, info: dict) -> None:
         with self.lock:
@@ -76,10 +104,15 @@ class BagRecorder(Node):
                 return
             new = topic not in self.bag.connections
             publishers = self.get_publishers_info_by_topic(topic) if new else []
-            self.bag.write(topic, msgtype, info['received_timestamp'], data,
-                           publish_time_ns=info['source_timestamp'],
-                           offered_qos=[offered_qos(p) for p in publishers] or None,
-                           type_hash=str(publishers[0].topic_type_hash) if publishers else None)
+            self.bag.write(
+                topic,
+                msgtype,
+                info['received_timestamp'],
+                data,
+                publish_time_ns=info['source_timestamp'],
+                offered_qos=[offered_qos(p) for p in publishers] or None,
+                type_hash=str(publishers[0].topic_type_hash) if publishers else None,
+            )
 
     @property
     def counts(self) -> dict[str, int]:
@@ -95,11 +128,12 @@ class BagRecorder(Node):
 
 
 class RecordingThread:
-    """A BagRecorder spinning in a thread of its own (same rclpy context as the caller).
+    """
+    A BagRecorder spinning in a thread of its own (same rclpy context as the caller).
 
-        recording = RecordingThread(path, topics, latched, namespace='/demo')
-        ...
-        recording.stop()   # stops the thread, closes the bag
+    recording = RecordingThread(path, topics, latched, namespace='/demo')
+    ...
+    recording.stop()   # stops the thread, closes the bag
     """
 
     def __init__(self, *args, **kwargs):

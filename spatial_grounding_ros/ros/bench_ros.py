@@ -1,6 +1,16 @@
-"""End-to-end ROS latency for `spatial-grounding bench`: the grounder node runs as its own
-process (as deployed); a client node in this process holds one entity map on the topic and
-times each instruction from publish() to the goal_pose callback."""
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+End-to-end ROS latency for `spatial-grounding bench`.
+
+The grounder node runs as its own process (as deployed); a client node in this process holds one
+entity map on the topic and times each instruction from publish() to the goal_pose callback.
+"""
+
 from __future__ import annotations
 
 import os
@@ -9,10 +19,10 @@ import subprocess
 import threading
 import time
 
-import numpy as np
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import numpy as np
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Header, String
@@ -50,8 +60,10 @@ class LatencyClient(Node):
         self.goal_received.set()
 
     def connected(self) -> bool:
-        return (self.instruction_pub.get_subscription_count() > 0
-                and self.count_publishers(f'{NAMESPACE}/goal_pose') > 0)
+        return (
+            self.instruction_pub.get_subscription_count() > 0
+            and self.count_publishers(f'{NAMESPACE}/goal_pose') > 0
+        )
 
     def request(self, text: str, timeout: float) -> float:
         """Seconds from publishing `text` to its goal_pose."""
@@ -63,17 +75,35 @@ class LatencyClient(Node):
         return self.received_at - sent
 
 
-def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str],
-                       requests: int, warmup: int = 20, progress=None) -> dict:
-    """p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
-    grounder process's RSS after the warm-up and at the end."""
+def round_trip_latency(
+    checkpoint: str,
+    grid: np.ndarray,
+    instructions: list[str],
+    requests: int,
+    warmup: int = 20,
+    progress=None,
+) -> dict:
+    """
+    Measure p50/p99 instruction -> goal_pose latency and the grounder's RSS.
+
+    p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
+    grounder process's RSS after the warm-up and at the end.
+    """
     # loopback only, and a domain of its own unless the caller chose one (both processes)
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(1, 100)))
     node_process = subprocess.Popen(
-        [*executable('grounder'), '--ros-args', '-r', f'__ns:={NAMESPACE}',
-         '-p', f'checkpoint:={checkpoint}'],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        [
+            *executable('grounder'),
+            '--ros-args',
+            '-r',
+            f'__ns:={NAMESPACE}',
+            '-p',
+            f'checkpoint:={checkpoint}',
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     context = rclpy.Context()
     rclpy.init(context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -105,10 +135,16 @@ def round_trip_latency(checkpoint: str, grid: np.ndarray, instructions: list[str
         context.try_shutdown()
         stop_processes(node_process)
     ms = np.array(latencies) * 1e3
-    return {'requests': requests, 'map': f'{grid.shape[0]}x{grid.shape[1]}',
-            'p50_ms': float(np.percentile(ms, 50)), 'p99_ms': float(np.percentile(ms, 99)),
-            'max_ms': float(ms.max()), 'mean_ms': float(ms.mean()),
-            'node_rss_mb_after_warmup': rss_after_warmup, 'node_rss_mb_end': rss_end,
-            'measured': 'instruction published by a client node in the bench process -> '
-                        'goal_pose received by it; the grounder node in its own process '
-                        f'(console script), one held map, {warmup} warm-up requests first'}
+    return {
+        'requests': requests,
+        'map': f'{grid.shape[0]}x{grid.shape[1]}',
+        'p50_ms': float(np.percentile(ms, 50)),
+        'p99_ms': float(np.percentile(ms, 99)),
+        'max_ms': float(ms.max()),
+        'mean_ms': float(ms.mean()),
+        'node_rss_mb_after_warmup': rss_after_warmup,
+        'node_rss_mb_end': rss_end,
+        'measured': 'instruction published by a client node in the bench process -> '
+        'goal_pose received by it; the grounder node in its own process '
+        f'(console script), one held map, {warmup} warm-up requests first',
+    }

@@ -1,56 +1,78 @@
-"""The closed-loop demo: the gridworld and grounder nodes run as real processes in a namespace
-of their own; the grounder answers each episode's instruction with a goal_pose, the gridworld
-walks its agent there cell by cell. A recorder in a thread of its own records every topic to
-an MCAP bag (log_time at reception, whatever this thread is doing); this thread watches the
-topics, prints one line per episode and a summary (also computed back from the bag with
-eval-bag), and draws a PNG per episode (map, predicted values, |Z1|, the path taken).
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The closed-loop demo.
+
+The gridworld and grounder nodes run as real processes in a namespace of their own; the grounder
+answers each episode's instruction with a goal_pose, the gridworld walks its agent there cell by
+cell. A recorder in a thread of its own records every topic to an MCAP bag (log_time at reception,
+whatever this thread is doing); this thread watches the topics, prints one line per episode and a
+summary (also computed back from the bag with eval-bag), and draws a PNG per episode (map,
+predicted values, |Z1|, the path taken).
 
 The gridworld publishes its first episode only once the grounder, the recorder and the
 watcher all subscribe to `instruction`, so each hears it live: no episode is restarted.
 """
+
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-import numpy as np
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import numpy as np
+import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Bool, Float32, Float32MultiArray, String
 from std_srvs.srv import Trigger
 
-from ..bags import evaluate_bag
-from ..entities import PUDDLEWORLD
-from ..plots import plot_grounding
 from . import convert
 from .bag_recorder import RecordingThread
 from .gridworld_node import LATCHED, STEPS
 from .node_support import stop_processes
+from ..bags import evaluate_bag
+from ..entities import PUDDLEWORLD
+from ..plots import plot_grounding
 
 RECORDED = {  # topic -> type; the first six are latched
-    'entity_map': 'nav_msgs/msg/OccupancyGrid', 'instruction': 'std_msgs/msg/String',
+    'entity_map': 'nav_msgs/msg/OccupancyGrid',
+    'instruction': 'std_msgs/msg/String',
     'true_goal': 'geometry_msgs/msg/PoseStamped',
     'true_value_map': 'std_msgs/msg/Float32MultiArray',
     'true_reward_map': 'std_msgs/msg/Float32MultiArray',
     'value_map_raw': 'std_msgs/msg/Float32MultiArray',
-    'value_map': 'nav_msgs/msg/OccupancyGrid', 'relation_map': 'nav_msgs/msg/OccupancyGrid',
-    'goal_pose': 'geometry_msgs/msg/PoseStamped', 'agent_pose': 'geometry_msgs/msg/PoseStamped',
-    'reward': 'std_msgs/msg/Float32', 'terminated': 'std_msgs/msg/Bool',
+    'value_map': 'nav_msgs/msg/OccupancyGrid',
+    'relation_map': 'nav_msgs/msg/OccupancyGrid',
+    'goal_pose': 'geometry_msgs/msg/PoseStamped',
+    'agent_pose': 'geometry_msgs/msg/PoseStamped',
+    'reward': 'std_msgs/msg/Float32',
+    'terminated': 'std_msgs/msg/Bool',
     'diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
 }
-LATCHED_TOPICS = {'entity_map', 'instruction', 'true_goal', 'true_value_map', 'true_reward_map',
-                  'value_map_raw', 'value_map', 'relation_map'}
+LATCHED_TOPICS = {
+    'entity_map',
+    'instruction',
+    'true_goal',
+    'true_value_map',
+    'true_reward_map',
+    'value_map_raw',
+    'value_map',
+    'relation_map',
+}
 
 
 def executable(name: str) -> list[str]:
-    """The console script next to this Python (a venv's bin), else `python -m`."""
+    """Return the console script next to this Python (a venv's bin), else `python -m`."""
     script = Path(sys.executable).parent / name
     if script.is_file():
         return [str(script)]
@@ -77,16 +99,21 @@ class DemoWatcher(Node):
         self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STEPS)
         self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STEPS)
         self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
-        self.create_subscription(OccupancyGrid, 'entity_map',
-                                 lambda m: setattr(self, 'map_msg', m), LATCHED)
-        self.create_subscription(Float32MultiArray, 'value_map_raw',
-                                 lambda m: setattr(self, 'values', m), LATCHED)
-        self.create_subscription(OccupancyGrid, 'relation_map',
-                                 lambda m: setattr(self, 'relation', m), LATCHED)
-        self.create_subscription(String, 'instruction',
-                                 lambda m: setattr(self, 'instruction', m.data), LATCHED)
-        self.create_subscription(PoseStamped, 'true_goal',
-                                 lambda m: setattr(self, 'true_goal', m), LATCHED)
+        self.create_subscription(
+            OccupancyGrid, 'entity_map', lambda m: setattr(self, 'map_msg', m), LATCHED
+        )
+        self.create_subscription(
+            Float32MultiArray, 'value_map_raw', lambda m: setattr(self, 'values', m), LATCHED
+        )
+        self.create_subscription(
+            OccupancyGrid, 'relation_map', lambda m: setattr(self, 'relation', m), LATCHED
+        )
+        self.create_subscription(
+            String, 'instruction', lambda m: setattr(self, 'instruction', m.data), LATCHED
+        )
+        self.create_subscription(
+            PoseStamped, 'true_goal', lambda m: setattr(self, 'true_goal', m), LATCHED
+        )
         self.next_client = self.create_client(Trigger, 'next_episode')
         self.reset_client = self.create_client(Trigger, 'reset_episode')
 
@@ -96,12 +123,19 @@ class DemoWatcher(Node):
 
     def seen(self) -> dict[str, int]:
         """Messages of the per-episode topics seen so far in this episode."""
-        return {'goal_pose': len(self.goals), 'agent_pose': len(self.poses),
-                'reward': len(self.rewards), 'terminated': self.terminated_msgs}
+        return {
+            'goal_pose': len(self.goals),
+            'agent_pose': len(self.poses),
+            'reward': len(self.rewards),
+            'terminated': self.terminated_msgs,
+        }
 
     def moves_complete(self) -> bool:
-        """Every move seen so far (a pose after the start) has its reward and terminated flag
-        too: they come on other topics and may trail the pose."""
+        """
+        Every move seen so far (a pose after the start) has its reward and terminated flag too.
+
+        They come on other topics and may trail the pose.
+        """
         moves = len(self.poses) - 1
         return moves >= 0 and len(self.rewards) >= moves and self.terminated_msgs >= moves
 
@@ -118,34 +152,53 @@ class DemoWatcher(Node):
 
 
 def spin_until(executor, condition, timeout: float, what: str, processes=()) -> None:
-    """Spin until `condition()`; TimeoutError after `timeout`, RuntimeError as soon as one of
-    `processes` ({log path: Popen}) has exited, with the last line of its log."""
+    """
+    Spin until `condition()`.
+
+    TimeoutError after `timeout`, RuntimeError as soon as one of `processes` ({log path: Popen})
+    has exited, with the last line of its log.
+    """
     deadline = time.monotonic() + timeout
     while not condition():
         for log, process in dict(processes).items():
             if process.poll() is not None:
                 last = (log.read_text().strip().splitlines() or ['(no output)'])[-1]
-                raise RuntimeError(f'demo: {log.stem} exited ({process.returncode}) while '
-                                   f'waiting for {what}: {last} (see {log})')
+                raise RuntimeError(
+                    f'demo: {log.stem} exited ({process.returncode}) while '
+                    f'waiting for {what}: {last} (see {log})'
+                )
         if time.monotonic() > deadline:
             raise TimeoutError(f'demo: no {what} within {timeout:g} s')
         executor.spin_once(timeout_sec=0.02)
 
 
-def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = '../shared/data',
-             step_period: float = 0.05, step_limit: int = 40) -> dict:
+def run_demo(
+    out: str | Path,
+    episodes: int = 5,
+    seed: int = 7,
+    data_dir: str = '../shared/data',
+    step_period: float = 0.05,
+    step_limit: int = 40,
+) -> dict:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bag_path = out / 'demo_bag'
     if bag_path.exists():
         shutil.rmtree(bag_path)
     use_data = (Path(data_dir) / 'puddleworld' / 'local.p').is_file()
-    source = ['-p', 'source:=pw-local', '-p', 'split:=test', '-p', f'data_dir:={data_dir}'] \
-        if use_data else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
+    source = (
+        ['-p', 'source:=pw-local', '-p', 'split:=test', '-p', f'data_dir:={data_dir}']
+        if use_data
+        else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
+    )
     namespace = f'/demo_{os.getpid()}'
     common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', '/diagnostics:=diagnostics']
-    env = {**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
-        'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')}
+    env = {
+        **os.environ,
+        'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
+            'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST'
+        ),
+    }
     rclpy.init()
     watcher = recording = None
     processes, logs = [], {}
@@ -158,21 +211,43 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
         recording = RecordingThread(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
         logs = {name: open(out / f'{name}.log', 'w') for name in ('grounder', 'gridworld')}
         processes = [
-            subprocess.Popen(executable('grounder') + common, env=env,
-                             stdout=logs['grounder'], stderr=subprocess.STDOUT),
+            subprocess.Popen(
+                executable('grounder') + common,
+                env=env,
+                stdout=logs['grounder'],
+                stderr=subprocess.STDOUT,
+            ),
             # the first episode waits for the instruction's three subscribers: the grounder,
             # the recorder and the watcher
-            subprocess.Popen(executable('gridworld') + common + source + [
-                '-p', f'seed:={seed}', '-p', 'order:=sequential',
-                '-p', f'step_limit:={step_limit}', '-p', f'step_period:={step_period}',
-                '-p', 'start_after_subscribers:=3'],
-                env=env, stdout=logs['gridworld'], stderr=subprocess.STDOUT),
+            subprocess.Popen(
+                executable('gridworld')
+                + common
+                + source
+                + [
+                    '-p',
+                    f'seed:={seed}',
+                    '-p',
+                    'order:=sequential',
+                    '-p',
+                    f'step_limit:={step_limit}',
+                    '-p',
+                    f'step_period:={step_period}',
+                    '-p',
+                    'start_after_subscribers:=3',
+                ],
+                env=env,
+                stdout=logs['gridworld'],
+                stderr=subprocess.STDOUT,
+            ),
         ]
-        running = {Path(logs[name].name): p for name, p in zip(('grounder', 'gridworld'),
-                                                               processes)}
-        print(f"gridworld ({'PuddleWorld local test maps' if use_data else 'generated worlds'})"
-              f' and grounder running in namespace {namespace}; recording to {bag_path}',
-              flush=True)
+        running = {
+            Path(logs[name].name): p for name, p in zip(('grounder', 'gridworld'), processes)
+        }
+        print(
+            f'gridworld ({"PuddleWorld local test maps" if use_data else "generated worlds"})'
+            f' and grounder running in namespace {namespace}; recording to {bag_path}',
+            flush=True,
+        )
         for k in range(episodes):
             if k > 0:
                 watcher.clear()
@@ -181,45 +256,83 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
             else:
                 # both processes start (torch loads: slow on a busy machine), and the gridworld
                 # publishes its first episode once the three subscribers are there
-                spin_until(executor, lambda: watcher.count_subscribers(
-                    f'{namespace}/instruction') >= 3, 600, 'grounder subscription', running)
-            spin_until(executor, lambda: watcher.goals and watcher.values is not None
-                       and watcher.relation is not None, 60, 'grounding', running)
+                spin_until(
+                    executor,
+                    lambda: watcher.count_subscribers(f'{namespace}/instruction') >= 3,
+                    600,
+                    'grounder subscription',
+                    running,
+                )
+            spin_until(
+                executor,
+                lambda: (
+                    watcher.goals and watcher.values is not None and watcher.relation is not None
+                ),
+                60,
+                'grounding',
+                running,
+            )
             goal = watcher.cell(watcher.goals[0])
 
             def settled() -> bool:
                 at = watcher.cell(watcher.poses[-1]) if watcher.poses else None
                 return watcher.moves_complete() and (
-                    watcher.terminated or at == goal or len(watcher.rewards) >= step_limit)
+                    watcher.terminated or at == goal or len(watcher.rewards) >= step_limit
+                )
 
-            spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival',
-                       running)
+            spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival', running)
             for topic, n in watcher.seen().items():
                 recorded_total[topic] = recorded_total.get(topic, 0) + n
             path = [watcher.cell(p) for p in watcher.poses]
             truth = watcher.cell(watcher.true_goal)
             error = abs(goal[0] - truth[0]) + abs(goal[1] - truth[1])
             instruction = watcher.instruction
-            grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10 ** 6)
+            grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10**6)
             values = convert.float32_multiarray_to_value_map(watcher.values)
-            relation = convert.occupancy_grid_to_grid(watcher.relation, 10 ** 6).astype(float)
-            png = plot_grounding(out / f'episode_{k}.png', grid, PUDDLEWORLD, values, relation,
-                                 instruction, goal, truth, path_cells=path)
+            relation = convert.occupancy_grid_to_grid(watcher.relation, 10**6).astype(float)
+            png = plot_grounding(
+                out / f'episode_{k}.png',
+                grid,
+                PUDDLEWORLD,
+                values,
+                relation,
+                instruction,
+                goal,
+                truth,
+                path_cells=path,
+            )
             reward = float(sum(watcher.rewards))
-            outcome = ('reached the true goal' if watcher.terminated else
-                       'stopped at its goal_pose, not the true goal' if path[-1] == goal else
-                       'did not get to its goal_pose')
-            line = (f'[{k}] {instruction!r}: goal {goal}, true {truth}, '
-                    f'{outcome}, '
-                    f'Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}')
+            outcome = (
+                'reached the true goal'
+                if watcher.terminated
+                else 'stopped at its goal_pose, not the true goal'
+                if path[-1] == goal
+                else 'did not get to its goal_pose'
+            )
+            line = (
+                f'[{k}] {instruction!r}: goal {goal}, true {truth}, '
+                f'{outcome}, '
+                f'Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}'
+            )
             print(line, flush=True)
-            lines.append({'goal': goal, 'truth': truth, 'end': path[-1],
-                          'reached': watcher.terminated, 'md': error, 'reward': reward})
+            lines.append(
+                {
+                    'goal': goal,
+                    'truth': truth,
+                    'end': path[-1],
+                    'reached': watcher.terminated,
+                    'md': error,
+                    'reward': reward,
+                }
+            )
         # the recorder hears what the watcher heard; wait until the bag holds it all
         full = {t: f'{namespace}/{t}' for t in recorded_total}
-        spin_until(executor, lambda: all(recording.counts.get(full[t], 0) >= n
-                                         for t, n in recorded_total.items()), 30,
-                   'recording of the last messages')
+        spin_until(
+            executor,
+            lambda: all(recording.counts.get(full[t], 0) >= n for t, n in recorded_total.items()),
+            30,
+            'recording of the last messages',
+        )
     finally:
         recorded = {}
         if recording is not None:
@@ -232,16 +345,23 @@ def run_demo(out: str | Path, episodes: int = 5, seed: int = 7, data_dir: str = 
         stop_processes(*processes)
         for log in logs.values():
             log.close()
-    summary = {'episodes': len(lines), 'reached': sum(l['reached'] for l in lines),
-               'md': float(np.mean([l['md'] for l in lines])) if lines else None,
-               'reward': float(np.mean([l['reward'] for l in lines])) if lines else None,
-               'bag': str(bag_path), 'from_bag': evaluate_bag(bag_path).metrics(),
-               'recorded': recorded, 'per_episode': lines}
+    summary = {
+        'episodes': len(lines),
+        'reached': sum(line['reached'] for line in lines),
+        'md': float(np.mean([line['md'] for line in lines])) if lines else None,
+        'reward': float(np.mean([line['reward'] for line in lines])) if lines else None,
+        'bag': str(bag_path),
+        'from_bag': evaluate_bag(bag_path).metrics(),
+        'recorded': recorded,
+        'per_episode': lines,
+    }
     bag = summary['from_bag']
-    print(f"summary: {summary['reached']}/{summary['episodes']} episodes reached the goal, "
-          f"mean Manhattan error {summary['md']:.2f}, mean reward {summary['reward']:.2f}; "
-          f"eval-bag on {bag_path}: n {bag['n']}, MD {bag['md']:.2f}"
-          + (f", PQ {bag['pq']:.3f}, MSE {bag['mse']:.3f}" if 'pq' in bag else ''))
+    print(
+        f'summary: {summary["reached"]}/{summary["episodes"]} episodes reached the goal, '
+        f'mean Manhattan error {summary["md"]:.2f}, mean reward {summary["reward"]:.2f}; '
+        f'eval-bag on {bag_path}: n {bag["n"]}, MD {bag["md"]:.2f}'
+        + (f', PQ {bag["pq"]:.3f}, MSE {bag["mse"]:.3f}' if 'pq' in bag else '')
+    )
     return summary
 
 
@@ -253,11 +373,15 @@ def cmd_closed_loop_demo(args) -> int:
 def register_cli(sub) -> None:
     from ..cli import DEFAULT_DATA
 
-    d = sub.add_parser('demo', help='gridworld + grounder nodes in a closed loop, recorded '
-                       'to a bag')
+    d = sub.add_parser(
+        'demo', help='gridworld + grounder nodes in a closed loop, recorded to a bag'
+    )
     d.add_argument('--episodes', type=int, default=5)
     d.add_argument('--seed', type=int, default=7)
-    d.add_argument('--data', default=DEFAULT_DATA,
-                   help='PuddleWorld local test maps are used when this folder holds them')
+    d.add_argument(
+        '--data',
+        default=DEFAULT_DATA,
+        help='PuddleWorld local test maps are used when this folder holds them',
+    )
     d.add_argument('--out', default='demo_out')
     d.set_defaults(func=cmd_closed_loop_demo)

@@ -1,10 +1,19 @@
-"""A GridWorldEnv-shaped client of the gridworld node, so rl.py's loop runs unchanged
-through topics: reset() calls next_episode and reads entity_map, instruction and agent_pose;
-step() publishes an action and waits for that move's agent_pose, reward and terminated.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+A GridWorldEnv-shaped client of the gridworld node, so rl.py's loop runs unchanged through topics.
+
+reset() calls next_episode and reads entity_map, instruction and agent_pose; step() publishes an
+action and waits for that move's agent_pose, reward and terminated.
 
 Messages of different topics may arrive in any order, so the client pairs them by count:
 the node publishes exactly one agent_pose, reward and terminated per move.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -13,9 +22,9 @@ import subprocess
 import sys
 import time
 
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
+import rclpy
 from rclpy.node import Node
 from std_msgs.msg import Bool, Float32, Int32, String
 from std_srvs.srv import Trigger
@@ -71,14 +80,16 @@ class GridWorldClient(Node):
         deadline = time.monotonic() + self.timeout
         while not condition():
             if time.monotonic() > deadline:
-                raise TimeoutError(f'no {what} from the gridworld node within {self.timeout:g} s '
-                                   f'(is it running in namespace {self.get_namespace()!r}?)')
+                raise TimeoutError(
+                    f'no {what} from the gridworld node within {self.timeout:g} s '
+                    f'(is it running in namespace {self.get_namespace()!r}?)'
+                )
             rclpy.spin_once(self, timeout_sec=0.05)
 
     def observation(self) -> dict:
         pose = self.poses[-1].pose.position
         agent = convert.point_to_cell(pose.x, pose.y, self.map_msg.info)
-        grid = convert.occupancy_grid_to_grid(self.map_msg, max_cells=10 ** 7)
+        grid = convert.occupancy_grid_to_grid(self.map_msg, max_cells=10**7)
         return {'grid': grid, 'instruction': self.instruction, 'agent': agent}
 
     def reset(self, seed=None) -> tuple[dict, dict]:
@@ -87,8 +98,10 @@ class GridWorldClient(Node):
         future = self.next_client.call_async(Trigger.Request())
         self.wait_for('next_episode response', future.done)
         # a new episode republishes map, instruction and the start pose
-        self.wait_for('episode start', lambda: all(self.counts[k] > before[k]
-                                                   for k in ('map', 'instruction', 'pose')))
+        self.wait_for(
+            'episode start',
+            lambda: all(self.counts[k] > before[k] for k in ('map', 'instruction', 'pose')),
+        )
         self.steps, self.done = 0, False
         return self.observation(), {'steps': 0}
 
@@ -97,8 +110,10 @@ class GridWorldClient(Node):
             raise RuntimeError('the episode is over: call reset() first')
         before = dict(self.counts)
         self.action_pub.publish(Int32(data=int(action)))
-        self.wait_for('move result', lambda: all(self.counts[k] > before[k]
-                                                 for k in ('pose', 'reward', 'terminated')))
+        self.wait_for(
+            'move result',
+            lambda: all(self.counts[k] > before[k] for k in ('pose', 'reward', 'terminated')),
+        )
         self.steps += 1
         reward, terminated = self.rewards[-1], self.terminals[-1]
         truncated = not terminated and self.steps >= self.step_limit
@@ -108,15 +123,33 @@ class GridWorldClient(Node):
 
 @contextlib.contextmanager
 def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
-    """Start a gridworld node process serving `task`'s train split (or the same generated
-    worlds as `train`) in a namespace of its own, and yield one client environment."""
+    """
+    Start a gridworld node process serving `task`'s train split.
+
+    Start a gridworld node process serving `task`'s train split (or the same generated
+    worlds as `train`) in a namespace of its own, and yield one client environment.
+    """
     namespace = f'/rl_{os.getpid()}'
     step_limit = cfg.step_limit or 5 * max(train.grids.shape[1:])
-    params = {'source': task, 'split': 'train', 'data_dir': str(data_dir),
-              'episodes': len(train), 'seed': seed, 'order': 'random',
-              'step_limit': step_limit + 1}  # the client cuts episodes off itself
-    cmd = [sys.executable, '-m', 'spatial_grounding_ros.ros.gridworld_node', '--ros-args',
-           '-r', f'__ns:={namespace}', '-r', '/diagnostics:=diagnostics']
+    params = {
+        'source': task,
+        'split': 'train',
+        'data_dir': str(data_dir),
+        'episodes': len(train),
+        'seed': seed,
+        'order': 'random',
+        'step_limit': step_limit + 1,
+    }  # the client cuts episodes off itself
+    cmd = [
+        sys.executable,
+        '-m',
+        'spatial_grounding_ros.ros.gridworld_node',
+        '--ros-args',
+        '-r',
+        f'__ns:={namespace}',
+        '-r',
+        '/diagnostics:=diagnostics',
+    ]
     for k, v in params.items():
         cmd += ['-p', f'{k}:={v}']
     node_process = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)

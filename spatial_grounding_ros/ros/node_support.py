@@ -1,9 +1,19 @@
-"""What both executables share: declared and checked parameters, a diagnostic that is also
-logged, and a main() that spins one node and shuts down cleanly.
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+What both executables share.
+
+Declared and checked parameters, a diagnostic that is also logged, and a main() that spins one node
+and shuts down cleanly.
 
 Start-up errors (a bad parameter value or type, checkpoint, entity table or params file) are
 one line `<name>: error: ...` on stderr and exit status 1.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -13,8 +23,12 @@ import sys
 from typing import Callable, Iterable
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
-                                SetParametersResult)
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    SetParametersResult,
+)
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -29,24 +43,28 @@ TYPE_NAMES = {bool: 'a bool', int: 'an integer', float: 'a double', str: 'a stri
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter of a node: its default (whose Python type is the parameter's type),
-    what it means, and what values it takes."""
+    """
+    One parameter of a node.
+
+    Its default (whose Python type is the parameter's type), what it means, and what values it
+    takes.
+    """
 
     name: str
     default: bool | int | float | str
     description: str
-    read_only: bool = False       # only start-up (or a params file) can set it
-    low: float | None = None      # inclusive range of a number
+    read_only: bool = False  # only start-up (or a params file) can set it
+    low: float | None = None  # inclusive range of a number
     high: float | None = None
     choices: tuple[str, ...] = ()
-    non_empty: bool = False       # a string that must not be empty
+    non_empty: bool = False  # a string that must not be empty
 
     @property
-    def type(self) -> type:
+    def type(self) -> type:  # noqa: A003
         return type(self.default)
 
     def constraints(self) -> str:
-        """The rule as words, for `ros2 param describe` and error messages."""
+        """Return the rule as words, for `ros2 param describe` and error messages."""
         if self.choices:
             return 'one of ' + ', '.join(self.choices)
         if self.non_empty:
@@ -60,27 +78,39 @@ class Param:
 
     def descriptor(self) -> ParameterDescriptor:
         descriptor = ParameterDescriptor(
-            name=self.name, type=Parameter.Type.from_parameter_value(self.default).value,
-            description=self.description, read_only=self.read_only,
-            additional_constraints=self.constraints())
+            name=self.name,
+            type=Parameter.Type.from_parameter_value(self.default).value,
+            description=self.description,
+            read_only=self.read_only,
+            additional_constraints=self.constraints(),
+        )
         if self.type is int and self.low is not None:
-            descriptor.integer_range = [IntegerRange(
-                from_value=int(self.low), to_value=int(self.high if self.high is not None
-                                                       else 2 ** 63 - 1), step=0)]
+            descriptor.integer_range = [
+                IntegerRange(
+                    from_value=int(self.low),
+                    to_value=int(self.high if self.high is not None else 2**63 - 1),
+                    step=0,
+                )
+            ]
         elif self.type is float and self.low is not None:
-            descriptor.floating_point_range = [FloatingPointRange(
-                from_value=float(self.low),
-                to_value=float(self.high if self.high is not None else sys.float_info.max),
-                step=0.0)]
+            descriptor.floating_point_range = [
+                FloatingPointRange(
+                    from_value=float(self.low),
+                    to_value=float(self.high if self.high is not None else sys.float_info.max),
+                    step=0.0,
+                )
+            ]
         return descriptor
 
     def problem(self, value) -> str | None:
-        """What is wrong with `value` for this parameter, or None."""
+        """Return what is wrong with `value` for this parameter, or None."""
         # bool is an int in Python: compare exact types
         if type(value) is not self.type:
             hint = ' (write 5.0, not 5)' if self.type is float and type(value) is int else ''
-            return (f'must be {TYPE_NAMES[self.type]}{hint}, got '
-                    f'{TYPE_NAMES.get(type(value), type(value).__name__)} {value!r}')
+            return (
+                f'must be {TYPE_NAMES[self.type]}{hint}, got '
+                f'{TYPE_NAMES.get(type(value), type(value).__name__)} {value!r}'
+            )
         if self.choices and value not in self.choices:
             return f'must be one of {", ".join(self.choices)}, got {value!r}'
         if self.non_empty and not value.strip():
@@ -89,13 +119,15 @@ class Param:
             if self.type is float and not math.isfinite(value):
                 return f'must be a finite number, got {value!r}'
             if (self.low is not None and value < self.low) or (
-                    self.high is not None and value > self.high):
+                self.high is not None and value > self.high
+            ):
                 return f'must be {self.constraints()}, got {value!r}'
         return None
 
 
 def declare_parameters(node: Node, params: Iterable[Param]) -> None:
-    """Declare `params` on `node` with descriptors and refuse bad values.
+    """
+    Declare `params` on `node` with descriptors and refuse bad values.
 
     At start-up a bad value or type from a params file or `-p` raises ValueError (one line,
     naming the parameter); later, `set_parameters` refuses it with the same reason (and
@@ -109,8 +141,9 @@ def declare_parameters(node: Node, params: Iterable[Param]) -> None:
             spec = params.get(change.name)
             problem = spec and spec.problem(change.value)
             if problem:
-                return SetParametersResult(successful=False,
-                                           reason=f'parameter {change.name} {problem}')
+                return SetParametersResult(
+                    successful=False, reason=f'parameter {change.name} {problem}'
+                )
         return SetParametersResult(successful=True)
 
     node.add_on_set_parameters_callback(on_set)
@@ -127,11 +160,13 @@ def declare_parameters(node: Node, params: Iterable[Param]) -> None:
     if unknown:
         node.get_logger().warning(
             f'ignoring unknown parameter(s) {", ".join(unknown)} (from a params file or -p): '
-            f'{node.get_name()} has {", ".join(params)}')
+            f'{node.get_name()} has {", ".join(params)}'
+        )
 
 
-def report(node: Node, publisher: Publisher, part: str, level: bytes, message: str,
-           **values) -> None:
+def report(
+    node: Node, publisher: Publisher, part: str, level: bytes, message: str, **values
+) -> None:
     """Log `message` at `level` and publish it as one DiagnosticStatus named `<node>: part`."""
     # one call site per severity: rclpy refuses to change a call site's severity
     if level == DiagnosticStatus.OK:
@@ -140,11 +175,16 @@ def report(node: Node, publisher: Publisher, part: str, level: bytes, message: s
         node.get_logger().warning(message)
     else:
         node.get_logger().error(message)
-    status = DiagnosticStatus(level=level, name=f'{node.get_fully_qualified_name()}: {part}',
-                              message=message, hardware_id='')
+    status = DiagnosticStatus(
+        level=level,
+        name=f'{node.get_fully_qualified_name()}: {part}',
+        message=message,
+        hardware_id='',
+    )
     status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-    publisher.publish(DiagnosticArray(header=Header(stamp=node.get_clock().now().to_msg()),
-                                      status=[status]))
+    publisher.publish(
+        DiagnosticArray(header=Header(stamp=node.get_clock().now().to_msg()), status=[status])
+    )
 
 
 def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
