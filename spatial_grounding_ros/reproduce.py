@@ -176,8 +176,8 @@ def merge_results(results_path: Path, row: dict) -> None:
 ABLATIONS = (
     ('recipe', {}, {}),
     ('MSE only (no goal cross-entropy)', {'goal_weight': 0.0}, {}),
-    ('fixed goal temperature 5', {'learn_goal_scale': False}, {}),
-    ('gradient maps span -1..1', {}, {'gradient_cells': 0.0}),
+    ('learned goal temperature', {'learn_goal_scale': True}, {}),
+    ('gradient maps in cells (1 per 4.5)', {}, {'gradient_cells': 4.5}),
     ('no world-pickle instructions', {'world_instructions': False}, {}),
     ('no generated worlds', {'synthetic': 0}, {}),
 )
