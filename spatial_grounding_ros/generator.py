@@ -91,7 +91,6 @@ FAMILY_OFFSETS = {
     'two-step': list(_TWO_STEP),
     'combined': _COMBINED,
 }
-LOCAL_OFFSETS = [o for f in LOCAL_FAMILIES for o in FAMILY_OFFSETS[f]]
 
 
 def random_grid(

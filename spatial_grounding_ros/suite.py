@@ -23,12 +23,13 @@ import json
 from pathlib import Path
 
 import numpy as np
-import torch
 from tqdm import tqdm
 
+from . import world
 from .checkpoints import load_checkpoint
 from .entities import PUDDLEWORLD
 from .generator import COMPOSITIONAL_FAMILIES, FAMILIES, GLOBAL_FAMILIES, LOCAL_FAMILIES, sample
+from .training import predict_maps
 
 GROUPS = {
     'local': LOCAL_FAMILIES,
@@ -42,21 +43,6 @@ def suite_worlds(family: str, size: int, n: int, seed: int):
     """Return n (grid, instruction, goal) of one family and size; the same for every model."""
     rng = np.random.default_rng([seed, size, FAMILIES.index(family)])
     return [sample(rng, family, size) for _ in range(n)]
-
-
-@torch.no_grad()
-def predict_maps(
-    loaded, grids: np.ndarray, instructions: list[str], batch_size: int
-) -> np.ndarray:
-    loaded.model.eval()
-    out = []
-    for i in range(0, len(grids), batch_size):
-        tokens = torch.from_numpy(loaded.vocab.encode_batch(instructions[i:i + batch_size]))
-        used = max(1, int((tokens != 0).sum(1).max()))
-        out.append(
-            loaded.model(torch.from_numpy(grids[i:i + batch_size]), tokens[:, :used]).numpy()
-        )
-    return np.concatenate(out)
 
 
 def _summary(distances: list[int]) -> dict:
@@ -94,9 +80,10 @@ def run_suite(
         grids = np.stack([w[0] for w in worlds])
         texts = [w[1] for w in worlds]
         goals = np.array([w[2] for w in worlds])
-        maps = predict_maps(loaded, grids, texts, batch_size=max(1, 65536 // (size * size)))
-        flat = maps.reshape(len(maps), -1).argmax(1)
-        pred = np.stack(np.divmod(flat, size), axis=1)
+        maps = predict_maps(
+            loaded.model, loaded.vocab, grids, texts, batch_size=max(1, 65536 // (size * size))
+        )
+        pred = world.argmax_cells(maps)
         d = np.abs(pred - goals).sum(1)
         distances[family][size] = d.tolist()
         for i in np.flatnonzero(d)[:failures_shown]:

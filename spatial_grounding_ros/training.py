@@ -120,10 +120,10 @@ def encode(vocab: Vocabulary, data: GroundingSet) -> tuple[torch.Tensor, torch.T
 
 def batches(lengths: np.ndarray, batch_size: int, rng: np.random.Generator) -> list[np.ndarray]:
     """
-    Yield shuffled batches of similar instruction length.
+    Return shuffled batches of similar instruction length.
 
-    Shuffled batches of similar instruction length (sorted within pools of 8 batches),
-    so padding, which the per-pair attention pays for, stays short.
+    Sorted by length within pools of 8 batches, so padding, which the per-pair attention
+    pays for, stays short.
     """
     order = rng.permutation(len(lengths))
     pool = batch_size * 8
@@ -142,15 +142,23 @@ def _trim(tokens: torch.Tensor) -> torch.Tensor:
 
 
 @torch.no_grad()
-def predict(model, vocab: Vocabulary, data: GroundingSet, batch_size: int = 512) -> np.ndarray:
-    """Predicted value maps (N, H, W) for a data set."""
+def predict_maps(
+    model, vocab: Vocabulary, grids: np.ndarray, instructions: list[str], batch_size: int = 512
+) -> np.ndarray:
+    """Predict value maps (N, H, W) for grids (N, H, W) and one instruction each."""
     model.eval()
-    grids, tokens = encode(vocab, data)
+    grids = torch.from_numpy(np.asarray(grids, dtype=np.int64))
+    tokens = torch.from_numpy(vocab.encode_batch(instructions))
     out = [
         model(grids[i:i + batch_size], _trim(tokens[i:i + batch_size]))
         for i in range(0, len(grids), batch_size)
     ]
     return torch.cat(out).numpy()
+
+
+def predict(model, vocab: Vocabulary, data: GroundingSet, batch_size: int = 512) -> np.ndarray:
+    """Predict value maps (N, H, W) for a data set."""
+    return predict_maps(model, vocab, data.grids, data.instructions, batch_size)
 
 
 def evaluate(model, vocab: Vocabulary, data: GroundingSet) -> dict:
@@ -372,7 +380,7 @@ def train_supervised(
         seed=tc.seed,
         best_epoch=best[2],
         val_metrics=val_metrics,
-        goal_scale=round(float(goal_log_scale.exp()), 3),
+        goal_scale=round(float(goal_log_scale.detach().exp()), 3),
         train_seconds=summary['train_seconds'],
         train_config=vars(tc).copy(),
         loss_history=[[round(x, 5) for x in row] for row in history],
