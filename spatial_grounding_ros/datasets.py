@@ -293,6 +293,10 @@ def load_isi(data_dir: str | Path, split: str) -> GroundingSet:
     return _stack(f'isi-{split}', ISI, rows)
 
 
+# The PuddleWorld modes (world folders) of each PuddleWorld task.
+PW_MODES = {'pw-local': ('local',), 'pw-global': ('global',), 'pw': ('local', 'global')}
+
+
 def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
     """Return a task's split: pw-local, pw-global, pw (both, 10x10) or isi."""
     if task not in TASKS:
@@ -303,11 +307,8 @@ def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
         raise ValueError(
             'PuddleWorld has no dev split: the validation split is carved out of train'
         )
-    if task == 'pw':
-        return GroundingSet.concat(
-            f'pw-{split}', [load_puddleworld(data_dir, m, split) for m in ('local', 'global')]
-        )
-    return load_puddleworld(data_dir, task.split('-')[1], split)
+    parts = [load_puddleworld(data_dir, mode, split) for mode in PW_MODES[task]]
+    return parts[0] if len(parts) == 1 else GroundingSet.concat(f'{task}-{split}', parts)
 
 
 def split_by_world(

@@ -32,6 +32,7 @@ from .datasets import (
     GroundingSet,
     load_task,
     load_world_instructions,
+    PW_MODES,
     pw_world_ids,
     split_by_world,
 )
@@ -184,10 +185,9 @@ def training_parts(
     parts = [human]
     if tc.world_instructions:
         held_out = set(val.worlds)
-        modes = {'pw-local': ('local',), 'pw-global': ('global',), 'pw': ('local', 'global')}[task]
         parts.append(
             load_world_instructions(
-                data_dir, [w for w in pw_world_ids(data_dir, modes) if w not in held_out]
+                data_dir, [w for w in pw_world_ids(data_dir, PW_MODES[task]) if w not in held_out]
             )
         )
     if tc.synthetic:
