@@ -359,7 +359,7 @@ def run_demo(
     print(
         f'summary: {summary["reached"]}/{summary["episodes"]} episodes reached the goal, '
         f'mean Manhattan error {summary["md"]:.2f}, mean reward {summary["reward"]:.2f}; '
-        f'eval-bag on {bag_path}: n {bag["n"]}, MD {bag["md"]:.2f}'
+        f'eval-bag on {bag_path}: n {bag["n"]}, MD {bag["md"]:.2f}, HIT {bag["hit"]:.2f}'
         + (f', PQ {bag["pq"]:.3f}, MSE {bag["mse"]:.3f}' if 'pq' in bag else '')
     )
     return summary
