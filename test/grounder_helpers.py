@@ -182,6 +182,11 @@ def interrupt(process) -> tuple[int, str]:
     try:
         output, _ = process.communicate(timeout=15)
     except subprocess.TimeoutExpired:
-        process.kill()
-        output, _ = process.communicate()
+        # the node's faulthandler then prints where each of its threads hangs
+        process.send_signal(signal.SIGABRT)
+        try:
+            output, _ = process.communicate(timeout=5)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            output, _ = process.communicate()
     return process.returncode, output

@@ -22,6 +22,7 @@ a diagnostic on /diagnostics, and the node keeps serving.
 from __future__ import annotations
 
 import sys
+from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
@@ -320,7 +321,7 @@ class GridWorldNode(Node):
         report(self, self.diagnostics_pub, part, level, message, **values)
 
 
-def main(args: list[str] | None = None) -> int:
+def main(args: list[str] | None = None) -> NoReturn:
     return spin(GridWorldNode, 'gridworld', args)
 
 

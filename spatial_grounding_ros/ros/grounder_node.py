@@ -27,6 +27,7 @@ keeps running. Topic names are fixed and relative: remap them (`-r goal_pose:=..
 from __future__ import annotations
 
 import sys
+from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
@@ -391,7 +392,7 @@ class GrounderNode(LifecycleNode):
         report(self, self.diagnostics_pub, part, level, message, **values)
 
 
-def main(args: list[str] | None = None) -> int:
+def main(args: list[str] | None = None) -> NoReturn:
     return spin(GrounderNode, 'grounder', args)
 
 
