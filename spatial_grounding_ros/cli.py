@@ -17,7 +17,7 @@ import argparse
 import json
 import sys
 
-DEFAULT_DATA = '../shared/data'
+from .datasets import DEFAULT_DATA, SPLITS, TASKS
 
 
 def cmd_train(args) -> int:
@@ -95,7 +95,6 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .datasets import SPLITS, TASKS
     from .models import MODELS
 
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])

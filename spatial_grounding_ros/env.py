@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import world
-from .datasets import GroundingSet, load_task
+from .datasets import DEFAULT_DATA, GroundingSet, load_task
 from .generator import generate
 
 DEFAULT_STEP_LIMIT = 50
@@ -127,7 +127,7 @@ class GridWorldEnv:
 def load_episodes(
     source: str,
     split: str = 'train',
-    data_dir: str = '../shared/data',
+    data_dir: str = DEFAULT_DATA,
     n: int = 100,
     seed: int = 0,
 ) -> GroundingSet:

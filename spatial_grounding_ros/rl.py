@@ -47,7 +47,7 @@ import torch
 from . import world
 from .augment import mirror_cell, MIRROR_IMAGES, mirror_instruction
 from .checkpoints import save_checkpoint
-from .datasets import GroundingSet, TASKS
+from .datasets import DEFAULT_DATA, GroundingSet, TASKS
 from .env import GridWorldEnv, load_episodes
 from .models import build_model, ModelConfig, MODELS
 from .text import Vocabulary
@@ -444,8 +444,6 @@ def cmd_rl_train(args) -> int:
 
 
 def register_cli(sub) -> None:
-    from .cli import DEFAULT_DATA
-
     p = sub.add_parser('rl-train', help='train a model by RL (fitted value iteration)')
     p.add_argument(
         '--task',

@@ -41,6 +41,7 @@ from .bag_recorder import RecordingThread
 from .gridworld_node import LATCHED, STEPS
 from .node_support import stop_processes
 from ..bags import evaluate_bag
+from ..datasets import DEFAULT_DATA
 from ..entities import PUDDLEWORLD
 from ..plots import plot_grounding
 
@@ -176,7 +177,7 @@ def run_demo(
     out: str | Path,
     episodes: int = 5,
     seed: int = 7,
-    data_dir: str = '../shared/data',
+    data_dir: str = DEFAULT_DATA,
     step_period: float = 0.05,
     step_limit: int = 40,
 ) -> dict:
@@ -371,8 +372,6 @@ def cmd_closed_loop_demo(args) -> int:
 
 
 def register_cli(sub) -> None:
-    from ..cli import DEFAULT_DATA
-
     d = sub.add_parser(
         'demo', help='gridworld + grounder nodes in a closed loop, recorded to a bag'
     )

@@ -35,7 +35,7 @@ from std_srvs.srv import Trigger
 from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .. import world
-from ..datasets import SPLITS, TASKS
+from ..datasets import DEFAULT_DATA, SPLITS, TASKS
 from ..env import GridWorldEnv, load_episodes
 
 NODE_NAME = 'gridworld'
@@ -63,7 +63,7 @@ PARAMETERS = (
     ),
     Param(
         'data_dir',
-        '../shared/data',
+        DEFAULT_DATA,
         'folder of the data sets (task sources only)',
         read_only=True,
         non_empty=True,
