@@ -21,14 +21,8 @@ from spatial_grounding_ros.augment import mirror
 from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.rl import (
-    act,
-    fitted_value_step,
-    ReplayBuffer,
-    reproduce_rl,
-    RLConfig,
-    train_rl,
-)
+from spatial_grounding_ros.reproduce import reproduce_rl
+from spatial_grounding_ros.rl import act, fitted_value_step, ReplayBuffer, RLConfig, train_rl
 from spatial_grounding_ros.text import tokenize, Vocabulary
 import torch
 

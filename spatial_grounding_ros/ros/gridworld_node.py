@@ -36,7 +36,7 @@ from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .. import world
 from ..datasets import DEFAULT_DATA, SPLITS, TASKS
-from ..env import GridWorldEnv, load_episodes
+from ..env import GENERATED, GridWorldEnv, load_episodes
 
 NODE_NAME = 'gridworld'
 LATCHED = QoSProfile(
@@ -45,7 +45,6 @@ LATCHED = QoSProfile(
 # One message per move on agent_pose / reward / terminated: deep enough that a client
 # pairing them by count never loses one.
 STEPS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-GENERATED = ('generator', 'generator-local', 'generator-global')
 
 # Everything here shapes the episodes or the timer made at start-up: read-only.
 PARAMETERS = (
