@@ -47,14 +47,8 @@ def cmd_eval(args) -> int:
     from .datasets import load_task
     from .training import evaluate
 
-    loaded = load_checkpoint(args.checkpoint)
     data = load_task(args.task, args.split, args.data)
-    if data.entities.names != loaded.entities.names:
-        raise ValueError(
-            f'{args.checkpoint}: checkpoint was trained on the '
-            f'{loaded.entities.domain} entity table, task {args.task} uses '
-            f'{data.entities.domain}'
-        )
+    loaded = load_checkpoint(args.checkpoint, expect_entities=data.entities)
     metrics = {
         'checkpoint': str(args.checkpoint),
         'model': loaded.name,

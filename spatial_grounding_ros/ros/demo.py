@@ -24,7 +24,6 @@ import os
 from pathlib import Path
 import shutil
 import subprocess
-import sys
 import time
 
 from geometry_msgs.msg import PoseStamped
@@ -38,8 +37,8 @@ from std_srvs.srv import Trigger
 
 from . import convert
 from .bag_recorder import RecordingThread
-from .gridworld_node import LATCHED, STEPS
-from .node_support import stop_processes
+from .processes import executable, stop_processes
+from .qos import LATCHED, STREAM
 from ..bags import evaluate_bag
 from ..datasets import DEFAULT_DATA
 from ..entities import PUDDLEWORLD
@@ -72,15 +71,6 @@ LATCHED_TOPICS = {
 }
 
 
-def executable(name: str) -> list[str]:
-    """Return the console script next to this Python (a venv's bin), else `python -m`."""
-    script = Path(sys.executable).parent / name
-    if script.is_file():
-        return [str(script)]
-    module = {'gridworld': 'gridworld_node', 'grounder': 'grounder_node'}[name]
-    return [sys.executable, '-m', f'spatial_grounding_ros.ros.{module}']
-
-
 class DemoWatcher(Node):
     """Follows one episode at a time: the goal the grounder sent, the agent's moves."""
 
@@ -97,9 +87,9 @@ class DemoWatcher(Node):
         self.true_goal: PoseStamped | None = None
         self.instruction = ''
         self.create_subscription(PoseStamped, 'goal_pose', self.goals.append, 10)
-        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STEPS)
-        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STEPS)
-        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
+        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STREAM)
+        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STREAM)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STREAM)
         self.create_subscription(
             OccupancyGrid, 'entity_map', lambda m: setattr(self, 'map_msg', m), LATCHED
         )

@@ -30,8 +30,8 @@ from std_msgs.msg import Bool, Float32, Int32, String
 from std_srvs.srv import Trigger
 
 from . import convert
-from .gridworld_node import LATCHED, STEPS
-from .node_support import stop_processes
+from .processes import stop_processes
+from .qos import LATCHED, STREAM
 
 
 class GridWorldClient(Node):
@@ -48,10 +48,10 @@ class GridWorldClient(Node):
         self.terminals: list[bool] = []
         self.create_subscription(OccupancyGrid, 'entity_map', self.on_map, LATCHED)
         self.create_subscription(String, 'instruction', self.on_instruction, LATCHED)
-        self.create_subscription(PoseStamped, 'agent_pose', self.on_pose, STEPS)
-        self.create_subscription(Float32, 'reward', self.on_reward, STEPS)
-        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
-        self.action_pub = self.create_publisher(Int32, 'action', STEPS)
+        self.create_subscription(PoseStamped, 'agent_pose', self.on_pose, STREAM)
+        self.create_subscription(Float32, 'reward', self.on_reward, STREAM)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STREAM)
+        self.action_pub = self.create_publisher(Int32, 'action', STREAM)
         self.next_client = self.create_client(Trigger, 'next_episode')
         self.steps = 0
         self.done = True

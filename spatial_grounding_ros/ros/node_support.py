@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-import subprocess
 import sys
 from typing import Callable, Iterable
 
@@ -35,6 +34,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from std_msgs.msg import Header
+
+from .processes import stop_processes  # noqa: F401 (ros/bench_ros.py imports it from here)
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
@@ -208,15 +209,3 @@ def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
-
-
-def stop_processes(*processes: subprocess.Popen, timeout: float = 10.0) -> None:
-    """Ask node processes to exit (SIGTERM), then kill whichever is still up after `timeout`."""
-    for p in processes:
-        p.terminate()
-    for p in processes:
-        try:
-            p.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
