@@ -207,13 +207,15 @@ def run_episodes(
     buffer: ReplayBuffer,
     epsilon: float,
     rng: np.random.Generator,
+    seeds: list[int | None] | None = None,
 ) -> list[float]:
     """
     One episode per environment, side by side, acting on one predicted map per episode.
 
-    Returns each episode's total reward.
+    `seeds` go to the environments' reset (None: they go on with their own RNG). Returns each
+    episode's total reward.
     """
-    obs = [env.reset()[0] for env in envs]
+    obs = [env.reset(seed=s)[0] for env, s in zip(envs, seeds or [None] * len(envs))]
     ids = [buffer.map_id(o['grid'], o['instruction']) for o in obs]
     maps = predicted_maps(model, vocab, [o['grid'] for o in obs], [o['instruction'] for o in obs])
     returns = [0.0] * len(envs)
@@ -287,11 +289,15 @@ def fitted_value_step(
     return loss.item()
 
 
-def make_envs(data: GroundingSet, cfg: RLConfig) -> list[GridWorldEnv]:
+def make_envs(data: GroundingSet, cfg: RLConfig) -> tuple[list[GridWorldEnv], list[int]]:
+    """
+    Return `cfg.envs` environments and the seeds of their first reset.
+
+    Environment n gets seed `cfg.seed + n * 2**32`, whose stream is that of
+    np.random.default_rng([cfg.seed, n]) (the same SeedSequence entropy words).
+    """
     envs = [GridWorldEnv(data, step_limit=cfg.step_limit) for _ in range(cfg.envs)]
-    for n, env in enumerate(envs):
-        env.rng = np.random.default_rng([cfg.seed, n])
-    return envs
+    return envs, [cfg.seed + (n << 32) for n in range(cfg.envs)]
 
 
 def train_rl(
@@ -340,7 +346,8 @@ def train_rl(
     model = build_model(model_name, mcfg)
     target_model = copy.deepcopy(model)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    envs = envs if envs is not None else make_envs(train, cfg)
+    # environments given (the ROS client) are seeded by whoever made them
+    envs, seeds = make_envs(train, cfg) if envs is None else (envs, None)
     buffer = ReplayBuffer(shape, cfg.mirrors)
     target_maps: dict[int, np.ndarray] = {}
     episodes, updates, log = 0, 0, []
@@ -355,7 +362,8 @@ def train_rl(
         progress_frac = episodes / max(1, cfg.eps_fraction * cfg.episodes)
         epsilon = cfg.eps_start + min(1.0, progress_frac) * (cfg.eps_end - cfg.eps_start)
         batch = envs[: max(1, min(len(envs), cfg.episodes - episodes))]
-        returns = run_episodes(batch, model, vocab, buffer, epsilon, rng)
+        returns = run_episodes(batch, model, vocab, buffer, epsilon, rng, seeds)
+        seeds = None  # seeded once, at the first reset
         episodes += len(batch)
         # 2. fitted value iteration on the replay buffer
         losses = []

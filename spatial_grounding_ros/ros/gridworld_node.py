@@ -138,7 +138,6 @@ class GridWorldNode(Node):
         self.env = GridWorldEnv(
             data, step_limit=self.param('step_limit'), order=self.param('order')
         )
-        self.env.rng = np.random.default_rng(self.param('seed'))
         self.obstacles = np.isin(data.grids, data.entities.obstacles)
         self.info = convert.map_info(
             self.env.shape,
@@ -197,7 +196,11 @@ class GridWorldNode(Node):
 
     def start_episode(self, example: int | None) -> None:
         """Reset the environment (the next episode, or `example` again) and publish it."""
-        self.env.reset(example=example)
+        # the first episode seeds the environment (its start cells and random order)
+        self.env.reset(
+            seed=self.param('seed') if self.env.example < 0 else None,
+            options=None if example is None else {'example': example},
+        )
         self.path_policy = self.path_goal = None
         i, header = self.env.example, self.header()
         self.map_pub.publish(convert.grid_to_occupancy_grid(self.env.grid, header, self.info))
