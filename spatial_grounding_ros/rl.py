@@ -27,8 +27,9 @@ stand out, are not drowned by the many wandering cells (plain mean square: prior
 and MD are then measured on the predicted maps of the test split
 (world.evaluate_maps), the true maps being used for that evaluation only.
 
-`--via-ros` runs the very same loop, but the episodes come from the gridworld node's topics
-(ros/gridworld_client.py) instead of an in-process GridWorldEnv.
+train_rl takes any environments with GridWorldEnv's interface: `rl-train --via-ros` (cli.py)
+runs the very same loop on the gridworld node's topics (ros/gridworld_client.py). The command
+line and the paper's RL rows (reproduce.py) live outside this file.
 """
 
 from __future__ import annotations

@@ -44,7 +44,7 @@ from ..datasets import DEFAULT_DATA
 from ..entities import PUDDLEWORLD
 from ..plots import plot_grounding
 
-RECORDED = {  # topic -> type; the first six are latched
+RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
     'entity_map': 'nav_msgs/msg/OccupancyGrid',
     'instruction': 'std_msgs/msg/String',
     'true_goal': 'geometry_msgs/msg/PoseStamped',
