@@ -2,7 +2,9 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-DATA ?= ../shared/data
+# The data sets' folder; empty: the commands' own default (datasets.DEFAULT_DATA).
+DATA ?=
+DATA_ARG := $(if $(DATA),--data $(DATA))
 STAMP := $(VENV)/.installed
 
 .PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl bench clean
@@ -23,7 +25,7 @@ test: $(STAMP)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q test
 
 reproduce: $(STAMP)
-	$(VENV)/bin/spatial-grounding reproduce --data $(DATA) --out results
+	$(VENV)/bin/spatial-grounding reproduce $(DATA_ARG) --out results
 
 # The reference suite on the shipped PuddleWorld checkpoints (make reproduce runs it too):
 # results/suite.json, results/suite.md
@@ -33,11 +35,11 @@ reproduce-suite: $(STAMP)
 # Each change of the clear-references recipe off in turn (about 25 minutes on 2 cores):
 # results/ablation.json, results/ablation.md
 reproduce-ablation: $(STAMP)
-	$(VENV)/bin/spatial-grounding reproduce --ablation --data $(DATA) --out results
+	$(VENV)/bin/spatial-grounding reproduce --ablation $(DATA_ARG) --out results
 
 # RL rows of the paper's table (about an hour on 2 cores): results/rl.json, results/rl.md
 reproduce-rl: $(STAMP)
-	$(VENV)/bin/spatial-grounding reproduce-rl --data $(DATA) --out results
+	$(VENV)/bin/spatial-grounding reproduce-rl $(DATA_ARG) --out results
 
 bench: $(STAMP)
 	$(VENV)/bin/spatial-grounding bench --out results/bench.json

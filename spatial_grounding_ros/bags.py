@@ -28,12 +28,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
 from . import world
+from .map_geometry import multiarray_to_map, point_to_cell
 
 STORE = 'ROS2_JAZZY'
 ROS_DISTRO = 'jazzy'
@@ -316,41 +316,6 @@ def resolve_topics(available: dict[str, str], wanted: dict[str, str]) -> dict[st
     return found
 
 
-def _cell(x: float, y: float, info) -> tuple[int, int] | None:
-    """
-    Return the data-set (row, col) of a map-frame point (x, y).
-
-    Data-set (row, col) (row 0 = north) of map-frame point (x, y) for an OccupancyGrid's
-    info (ros/convert.point_to_cell's convention, for planar yaw-only origins, without rclpy).
-    """
-    o, p = info.origin.orientation, info.origin.position
-    yaw = math.atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z))
-    dx, dy = x - p.x, y - p.y
-    lx, ly = math.cos(yaw) * dx + math.sin(yaw) * dy, -math.sin(yaw) * dx + math.cos(yaw) * dy
-    col, grid_row = math.floor(lx / info.resolution), math.floor(ly / info.resolution)
-    if not (0 <= col < info.width and 0 <= grid_row < info.height):
-        return None
-    return info.height - 1 - grid_row, col
-
-
-def multiarray_to_map(msg) -> np.ndarray:
-    """
-    Convert a Float32MultiArray in OccupancyGrid cell order to (H, W) float32, row 0 north.
-
-    A Float32MultiArray (height, width) in OccupancyGrid cell order -> (H, W) float32,
-    row 0 = north. Duck-typed, so it reads rclpy messages and rosbags' decoded ones alike.
-    """
-    if len(msg.layout.dim) != 2:
-        raise ValueError(
-            f'expected a 2-D Float32MultiArray layout, got {len(msg.layout.dim)} dims'
-        )
-    h, w = msg.layout.dim[0].size, msg.layout.dim[1].size
-    data = np.asarray(msg.data, dtype=np.float32)[msg.layout.data_offset:]
-    if data.size != h * w:
-        raise ValueError(f'{data.size} values for a {h}x{w} layout')
-    return data.reshape(h, w)[::-1].copy()
-
-
 @dataclass
 class Episode:
     instruction: str
@@ -436,8 +401,8 @@ def evaluate_bag(path: str | Path, topics: dict[str, str] | None = None) -> BagE
         if p['goal'] is not None and p['truth'] is not None and p['map'] is not None:
             info = p['map'].info
             cells = (
-                _cell(p['goal'].pose.position.x, p['goal'].pose.position.y, info),
-                _cell(p['truth'].pose.position.x, p['truth'].pose.position.y, info),
+                point_to_cell(p['goal'].pose.position.x, p['goal'].pose.position.y, info),
+                point_to_cell(p['truth'].pose.position.x, p['truth'].pose.position.y, info),
             )
         if cells is None or None in cells:
             result.unanswered += 1

@@ -14,10 +14,11 @@ line `spatial-grounding: error: ...` and exits with status 2, without a tracebac
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 
-DEFAULT_DATA = '../shared/data'
+from .datasets import DEFAULT_DATA, SPLITS, TASKS
 
 
 def cmd_train(args) -> int:
@@ -46,14 +47,8 @@ def cmd_eval(args) -> int:
     from .datasets import load_task
     from .training import evaluate
 
-    loaded = load_checkpoint(args.checkpoint)
     data = load_task(args.task, args.split, args.data)
-    if data.entities.names != loaded.entities.names:
-        raise ValueError(
-            f'{args.checkpoint}: checkpoint was trained on the '
-            f'{loaded.entities.domain} entity table, task {args.task} uses '
-            f'{data.entities.domain}'
-        )
+    loaded = load_checkpoint(args.checkpoint, expect_entities=data.entities)
     metrics = {
         'checkpoint': str(args.checkpoint),
         'model': loaded.name,
@@ -87,6 +82,41 @@ def cmd_reproduce(args) -> int:
     return 0
 
 
+def cmd_rl_train(args) -> int:
+    from .env import load_episodes
+    from .options import from_options
+    from .rl import RLConfig, train_rl
+
+    cfg = from_options(RLConfig, args)
+    train = test = None
+    if args.task.startswith('generator'):
+        train = load_episodes(args.task, n=args.generated, seed=cfg.seed)
+        test = load_episodes(args.task, n=max(50, args.generated // 5), seed=cfg.seed + 1000)
+    run = functools.partial(
+        train_rl, args.task, args.model, args.data, args.out, cfg, train, test,
+        progress=not args.quiet,
+    )
+    if args.via_ros:
+        from .ros.gridworld_client import ros_envs
+
+        with ros_envs(args.task, args.data, train, cfg, cfg.seed) as envs:
+            path, summary = run(envs=envs)
+    else:
+        path, summary = run()
+    print(json.dumps({'checkpoint': str(path), **summary}))
+    return 0
+
+
+def cmd_reproduce_rl(args) -> int:
+    from .reproduce import reproduce_rl
+
+    reproduce_rl(
+        args.data, args.out, args.tasks, args.models, args.episodes_scale, args.jobs,
+        args.checkpoints,
+    )
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     """Usage mistakes are one line and exit status 2, like every other bad input."""
 
@@ -95,7 +125,6 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .datasets import SPLITS, TASKS
     from .models import MODELS
 
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
@@ -185,21 +214,66 @@ def build_parser() -> argparse.ArgumentParser:
     )
     r.set_defaults(func=cmd_reproduce)
 
+    add_rl_commands(sub)
     for register in _extensions():
         register(sub)
     return p
+
+
+def add_rl_commands(sub) -> None:
+    from .env import GENERATED
+    from .models import MODELS
+    from .options import add_options
+    from .reproduce import RL_TASKS
+    from .rl import RLConfig
+
+    p = sub.add_parser('rl-train', help='train a model by RL (fitted value iteration)')
+    p.add_argument('--task', required=True, choices=[*TASKS, *GENERATED])
+    p.add_argument('--model', required=True, choices=list(MODELS))
+    p.add_argument('--data', default=DEFAULT_DATA)
+    p.add_argument('--out', default='out')
+    add_options(p, RLConfig)
+    p.add_argument(
+        '--generated',
+        type=int,
+        default=500,
+        help='number of generated training examples (generator* tasks)',
+    )
+    p.add_argument(
+        '--via-ros', action='store_true', help="run episodes through the gridworld node's topics"
+    )
+    p.add_argument('--quiet', action='store_true')
+    p.set_defaults(func=cmd_rl_train)
+
+    r = sub.add_parser(
+        'reproduce-rl',
+        help="RL rows of the paper's table: train, evaluate, write rl.json and rl.md",
+    )
+    r.add_argument('--data', default=DEFAULT_DATA)
+    r.add_argument('--out', default='results')
+    r.add_argument('--checkpoints', default='out', help='where the RL checkpoints go')
+    r.add_argument('--tasks', nargs='+', default=list(RL_TASKS), choices=RL_TASKS)
+    r.add_argument('--models', nargs='+', default=['t-rnet-attn', 't-cnn'], choices=list(MODELS))
+    r.add_argument(
+        '--episodes-scale',
+        type=float,
+        default=1.0,
+        help='multiply every episode budget (e.g. 0.05 for a quick check)',
+    )
+    r.add_argument('--jobs', type=int, default=2, help='runs in parallel, one thread each')
+    r.set_defaults(func=cmd_reproduce_rl)
 
 
 def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, RL, bags, and the closed-loop demo, which needs rclpy (without it, every other
+    bench, bags, the suite, and the closed-loop demo, which needs rclpy (without it, every other
     subcommand still works).
     """
-    from . import bags, bench, rl, suite
+    from . import bags, bench, suite
 
-    found = [bench.register_cli, rl.register_cli, bags.register_cli, suite.register_cli]
+    found = [bench.register_cli, bags.register_cli, suite.register_cli]
     try:
         from .ros import demo
     except ImportError:

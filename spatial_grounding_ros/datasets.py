@@ -8,7 +8,7 @@
 Data sets.
 
 PuddleWorld (human instructions, the paper's split), ISI blocks, and a train/validation split by
-world. All read from a path (`--data DIR`, `../shared/data`).
+world. All read from a path (`--data DIR`, default `DEFAULT_DATA`).
 
 Every loader returns a `GroundingSet`: aligned arrays of grids, instructions, true value
 maps, reward and terminal maps, and goal cells. The generator of our own PuddleWorld-style
@@ -28,6 +28,9 @@ import numpy as np
 from . import world
 from .entities import EntityTable, ISI, PUDDLEWORLD
 
+# Where the data sets are read from unless a command, node parameter or call says otherwise:
+# the one place this path is written (the Makefile and config/gridworld.yaml take it from here).
+DEFAULT_DATA = '../shared/data'
 TASKS = ('pw-local', 'pw-global', 'pw', 'isi')
 SPLITS = ('train', 'dev', 'test')
 

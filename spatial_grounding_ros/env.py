@@ -5,7 +5,7 @@
 # https://opensource.org/licenses/MIT.
 
 """
-The navigation environment of the paper's RL task, gymnasium-style without the dependency.
+The navigation environment of the paper's RL task, a Gymnasium environment.
 
 One episode = one example of a `GroundingSet` (a map, an instruction, and that example's
 reward and terminal maps): the agent starts on a random non-terminal cell, moves with
@@ -17,24 +17,49 @@ the example index so that training code can look up the map and the instruction.
     env = GridWorldEnv(generate(100, seed=0))
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(3)   # right
+    env.reset(options={'example': 4, 'start': (0, 0)})      # a chosen example and start cell
 
-The gridworld ROS node wraps this class, so in-process and through-ROS runs see the same
-world.
+The gridworld ROS node wraps this class, and ros/gridworld_client.py serves the same
+interface over its topics, so in-process and through-ROS runs see the same world.
 """
 
 from __future__ import annotations
 
+import gymnasium
+from gymnasium import spaces
 import numpy as np
 
 from . import world
-from .datasets import GroundingSet, load_task
+from .datasets import DEFAULT_DATA, GroundingSet, load_task
 from .generator import generate
 
 DEFAULT_STEP_LIMIT = 50
+# Episode sources made by the generator (no data set needed); the rest are datasets.TASKS.
+GENERATED = ('generator', 'generator-local', 'generator-global')
 
 
-class GridWorldEnv:
+def observation_space(shape: tuple[int, int], n_entities: int, instructions) -> spaces.Dict:
+    """
+    Return the observation space: the entity grid, the instruction, the agent's (row, col).
+
+    The instruction's characters and length are those of `instructions` (the episodes' own).
+    """
+    charset = ''.join(sorted(set(''.join(instructions)))) or ' '
+    return spaces.Dict(
+        {
+            'grid': spaces.Box(0, n_entities - 1, shape=shape, dtype=np.int64),
+            'instruction': spaces.Text(
+                max_length=max(1, *(len(t) for t in instructions)), min_length=0, charset=charset
+            ),
+            'agent': spaces.Tuple((spaces.Discrete(shape[0]), spaces.Discrete(shape[1]))),
+        }
+    )
+
+
+class GridWorldEnv(gymnasium.Env):
     """Episodes over the examples of `data`, in a random order (or a fixed `order`)."""
+
+    metadata = {'render_modes': []}
 
     def __init__(
         self, data: GroundingSet, step_limit: int = DEFAULT_STEP_LIMIT, order: str = 'random'
@@ -46,7 +71,10 @@ class GridWorldEnv:
         if order not in ('random', 'sequential'):
             raise ValueError(f'unknown episode order {order!r}; use random or sequential')
         self.data, self.step_limit, self.order = data, step_limit, order
-        self.rng = np.random.default_rng()
+        self.observation_space = observation_space(
+            self.shape, len(data.entities), data.instructions
+        )
+        self.action_space = spaces.Discrete(len(world.ACTIONS))
         self.example = -1
         self.agent: tuple[int, int] = (0, 0)
         self.steps = 0
@@ -70,7 +98,8 @@ class GridWorldEnv:
         return tuple(int(x) for x in self.data.goals[self.example])
 
     def observation(self) -> dict:
-        return {'grid': self.grid, 'instruction': self.instruction, 'agent': self.agent}
+        """Return the observation: a copy of the grid, never a view into the data set."""
+        return {'grid': self.grid.copy(), 'instruction': self.instruction, 'agent': self.agent}
 
     def info(self) -> dict:
         return {
@@ -80,31 +109,32 @@ class GridWorldEnv:
             'world': self.data.worlds[self.example] if self.data.worlds else '',
         }
 
-    def reset(
-        self,
-        seed: int | None = None,
-        example: int | None = None,
-        start: tuple[int, int] | None = None,
-    ) -> tuple[dict, dict]:
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
         """
-        Start the next episode (or example `example`).
+        Start the next episode: a random example (or the next one in order), a random start.
 
-        It starts on a random non-terminal cell (or `start`).
+        `seed` seeds the environment's RNG (`self.np_random`), as Gymnasium does. Options:
+        `example` (that example's episode) and `start` (that (row, col) start cell).
         """
-        if seed is not None:
-            self.rng = np.random.default_rng(seed)
+        super().reset(seed=seed)
+        options = options or {}
+        unknown = set(options) - {'example', 'start'}
+        if unknown:
+            raise ValueError(f'unknown reset option(s) {sorted(unknown)}; use example, start')
+        example = options.get('example')
         if example is None:
             example = (
-                int(self.rng.integers(len(self.data)))
+                int(self.np_random.integers(len(self.data)))
                 if self.order == 'random'
                 else (self.example + 1) % len(self.data)
             )
         if not 0 <= example < len(self.data):
             raise ValueError(f'example {example} is out of range 0..{len(self.data) - 1}')
         self.example = int(example)
+        start = options.get('start')
         if start is None:
             free = np.flatnonzero(~self.data.terminal[self.example].reshape(-1))
-            start = np.unravel_index(int(self.rng.choice(free)), self.shape)
+            start = np.unravel_index(int(self.np_random.choice(free)), self.shape)
         start = (int(start[0]), int(start[1]))
         if not (0 <= start[0] < self.shape[0] and 0 <= start[1] < self.shape[1]):
             raise ValueError(f'start cell {start} is outside the {self.shape} map')
@@ -127,7 +157,7 @@ class GridWorldEnv:
 def load_episodes(
     source: str,
     split: str = 'train',
-    data_dir: str = '../shared/data',
+    data_dir: str = DEFAULT_DATA,
     n: int = 100,
     seed: int = 0,
 ) -> GroundingSet:

@@ -15,7 +15,6 @@ package, and run the reference suite on the shipped PuddleWorld checkpoints (`re
 
 from __future__ import annotations
 
-import fcntl
 import json
 from pathlib import Path
 import platform
@@ -27,6 +26,8 @@ import torch
 
 from .checkpoints import load_checkpoint, PACKAGED_DIR
 from .datasets import load_task
+from .results import merge_rows
+from .rl import RLConfig, train_rl
 from .training import EPOCHS, evaluate, train_supervised, TrainConfig
 
 # Table 1 of the paper (value maps, test split): (MSE, PQ, MD); ISI has no PQ there.
@@ -148,27 +149,13 @@ def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int
 
 
 def merge_results(results_path: Path, row: dict) -> None:
-    """
-    Add or replace one (task, model) row.
-
-    Runs of several processes (one per task) may share the file, so the read-modify-write happens
-    under a lock.
-    """
-    results_path.parent.mkdir(parents=True, exist_ok=True)
-    with open(results_path.with_suffix('.lock'), 'w') as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        runs = json.loads(results_path.read_text())['runs'] if results_path.is_file() else []
-        runs = {(r['task'], r['model']): r for r in runs}
-        runs[(row['task'], row['model'])] = row
-        order = {t: i for i, t in enumerate(('pw-local', 'pw-global', 'pw', 'isi'))}
-        rows = sorted(runs.values(), key=lambda r: (order.get(r['task'], 9), r['model']))
-        meta = {
-            'command': 'make reproduce',
-            'machine': platform.processor() or platform.machine(),
-            'torch': torch.__version__,
-        }
-        results_path.write_text(json.dumps({'meta': meta, 'runs': rows}, indent=1) + '\n')
-        results_path.with_suffix('.md').write_text(markdown_table(rows))
+    """Add or replace one (task, model) row of value_map.json and its table (locked merge)."""
+    meta = {
+        'command': 'make reproduce',
+        'machine': platform.processor() or platform.machine(),
+        'torch': torch.__version__,
+    }
+    merge_rows(results_path, [row], 'runs', {'meta': meta}, markdown_table)
 
 
 # Each change of the clear-references recipe, turned off one at a time from the full recipe
@@ -247,4 +234,97 @@ def reproduce_ablation(
             f'| {r["suite"]["sizes"]["32"]["hit"]:.1%} | {human[0]} | {human[1]} |'
         )
     (Path(out) / 'ablation.md').write_text('\n'.join(lines) + '\n')
+    return rows
+
+
+# --- the paper's RL rows: `make reproduce-rl` --------------------------------------------
+
+RL_TASKS = ('pw-local', 'pw-global', 'isi')
+# The paper's Table (RL, test split): (PQ, MD) per model and task.
+PAPER_RL = {
+    't-cnn': {'pw-local': (0.89, 2.03), 'pw-global': (0.91, 3.80), 'isi': (0.74, 3.94)},
+    't-uvfa': {'pw-local': (0.56, 4.71), 'pw-global': (0.62, 6.28), 'isi': (0.15, 4.61)},
+    't-rnet-attn': {'pw-local': (0.91, 2.10), 'pw-global': (0.93, 4.23), 'isi': (0.84, 3.79)},
+}
+# Episode budgets per task, the same for every model, sized for about an hour on 2 cores:
+# RLConfig's default, less on ISI, where t-RNetAttn's attention phase (the last 15% of
+# episodes) is slowest with the long instructions.
+RL_EPISODES = {'pw-local': RLConfig.episodes, 'pw-global': RLConfig.episodes, 'isi': 12_000}
+# relative cost per episode, to start the longest runs first
+RL_COST = {'t-rnet-attn': 10, 't-rnet': 3, 't-cnn': 1, 't-uvfa': 1}
+
+
+def rl_table(results: list[dict]) -> str:
+    """Markdown: ours beside the paper's PQ / MD, under the caption line of results/rl.md."""
+    lines = [
+        'RL goal navigation (fitted value iteration, rewards only), test split; paper = '
+        'Yang et al. 2020 Table 1.',
+        '',
+        '| task | model | PQ ours | PQ paper | MD ours | MD paper | episodes | minutes |',
+        '| --- | --- | --- | --- | --- | --- | --- | --- |',
+    ]
+    for r in results:
+        pq, md = PAPER_RL.get(r['model'], {}).get(r['task'], (None, None))
+        lines.append(
+            f'| {r["task"]} | {r["model"]} | {r["test"]["pq"]:.2f} | {_fmt(pq)} '
+            f'| {r["test"]["md"]:.2f} | {_fmt(md)} | {r["episodes"]} '
+            f'| {r["train_seconds"] / 60:.1f} |'
+        )
+    return '\n'.join(lines) + '\n'
+
+
+def reproduce_rl(
+    data_dir: str,
+    out: str,
+    tasks=RL_TASKS,
+    models=('t-rnet-attn', 't-cnn'),
+    scale: float = 1.0,
+    jobs: int = 2,
+    checkpoints: str = 'out',
+) -> list[dict]:
+    """
+    Train every (model, task) by RL in `jobs` processes, one thread each.
+
+    Each finished run replaces its row of out/rl.json and out/rl.md (results.merge_rows);
+    rows of other tasks and models stay.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    runs = sorted(
+        ((m, t) for m in models for t in tasks),
+        key=lambda mt: -RL_EPISODES[mt[1]] * RL_COST[mt[0]] * (3 if mt[1] == 'isi' else 1),
+    )
+    head = {
+        'command': f'spatial-grounding reproduce-rl --data {data_dir} --out {out}',
+        'paper': PAPER_RL,
+    }
+    rows = []
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = [
+            pool.submit(
+                train_rl,
+                t,
+                m,
+                data_dir,
+                checkpoints,
+                RLConfig(episodes=max(1, int(RL_EPISODES[t] * scale))),
+                progress=False,
+            )
+            for m, t in runs
+        ]
+        for (m, t), f in zip(runs, futures):
+            path, summary = f.result()
+            print(
+                f'{t} {m}: PQ {summary["test"]["pq"]:.3f}  MD {summary["test"]["md"]:.2f}  '
+                f'({summary["train_seconds"] / 60:.1f} min) -> {path}',
+                flush=True,
+            )
+            rows = merge_rows(
+                Path(out) / 'rl.json',
+                [{**summary, 'checkpoint': str(path)}],
+                'results',
+                head,
+                rl_table,
+            )
+    print(rl_table(rows))
     return rows

@@ -27,17 +27,16 @@ stand out, are not drowned by the many wandering cells (plain mean square: prior
 and MD are then measured on the predicted maps of the test split
 (world.evaluate_maps), the true maps being used for that evaluation only.
 
-`--via-ros` runs the very same loop, but the episodes come from the gridworld node's topics
-(ros/gridworld_client.py) instead of an in-process GridWorldEnv.
+train_rl takes any environments with GridWorldEnv's interface: `rl-train --via-ros` (cli.py)
+runs the very same loop on the gridworld node's topics (ros/gridworld_client.py). The command
+line and the paper's RL rows (reproduce.py) live outside this file.
 """
 
 from __future__ import annotations
 
-import argparse
 import copy
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 import functools
-import json
 from pathlib import Path
 import time
 
@@ -47,38 +46,57 @@ import torch
 from . import world
 from .augment import mirror_cell, MIRROR_IMAGES, mirror_instruction
 from .checkpoints import save_checkpoint
-from .datasets import GroundingSet, TASKS
+from .datasets import GroundingSet
 from .env import GridWorldEnv, load_episodes
-from .models import build_model, ModelConfig, MODELS
+from .models import build_model, ModelConfig
+from .options import check, option
 from .text import Vocabulary
 from .training import predict, TASK_SETTINGS
-
-RL_TASKS = ('pw-local', 'pw-global', 'isi')
 
 
 @dataclass
 class RLConfig:
-    """All RL hyper-parameters in one place."""
+    """All RL hyper-parameters, each declared once: `rl-train` makes its options of them."""
 
-    episodes: int = 20_000  # episodes of experience in total
-    envs: int = 128  # episodes run side by side per round (one forward pass)
-    step_limit: int | None = None  # None: 5 * the map's longer side
-    gamma: float = world.GAMMA
-    lr: float = 1e-3
-    batch_maps: int = 64  # maps per regression step (all their visited cells)
-    updates_per_round: int = 48  # regression steps after each round of episodes
-    target_sync: int = 100  # regression steps between target-network syncs
-    priority: float = 1.0  # weight cells by (|error| + 0.1)^priority (0: plain mean)
-    double: bool = False  # double FVI: online map picks the next cell, target values it
-    eps_start: float = 1.0  # epsilon-greedy exploration, decayed linearly ...
-    eps_end: float = 0.1
-    eps_fraction: float = 0.5  # ... over this fraction of the episodes
-    # share of episodes t-RNetAttn runs with (still uniform) attention off
-    attention_warmup: float = 0.85
-    # also learn from the mirror images of each map; None: the task's (training.TASK_SETTINGS)
-    mirrors: bool | None = None
-    seed: int = 0
-    threads: int = 1
+    episodes: int = option(16_000, 'episodes of experience in total', low=0)
+    envs: int = option(128, 'episodes run side by side per round (one forward pass)', low=1)
+    step_limit: int | None = option(
+        None, "moves per episode before it is cut off (default: 5 * the map's longer side)", low=1
+    )
+    gamma: float = option(world.GAMMA, 'discount of the value targets', low=0.0, high=1.0)
+    lr: float = option(1e-3, 'Adam learning rate', low=0.0)
+    batch_maps: int = option(64, 'maps per regression step (all their visited cells)', low=1)
+    updates_per_round: int = option(
+        48, 'regression steps after each round of episodes', low=0
+    )
+    target_sync: int = option(100, 'regression steps between target-network syncs', low=1)
+    priority: float = option(
+        1.0, 'weight each cell by (|error| + 0.1)^priority (0: plain mean square)', low=0.0
+    )
+    double: bool = option(
+        False, 'double FVI: the online map picks the next cell, the target map values it'
+    )
+    eps_start: float = option(
+        1.0, 'epsilon-greedy exploration at the start', low=0.0, high=1.0
+    )
+    eps_end: float = option(0.1, 'epsilon after the decay', low=0.0, high=1.0)
+    eps_fraction: float = option(
+        0.5, 'share of the episodes over which epsilon decays linearly', low=0.0, high=1.0
+    )
+    attention_warmup: float = option(
+        0.85, 'share of episodes t-RNetAttn runs with (still uniform) attention off',
+        low=0.0, high=1.0,
+    )
+    mirrors: bool | None = option(
+        None, "also learn from the mirror images of each map (default: the task's, "
+        'training.TASK_SETTINGS: on for PuddleWorld)',
+    )
+    seed: int = option(0, 'seed of the weights, the exploration and the episodes', low=0,
+                       high=2**32 - 1)
+    threads: int = option(1, 'torch threads', low=1)
+
+    def __post_init__(self):
+        check(self)
 
 
 class ReplayBuffer:
@@ -190,13 +208,15 @@ def run_episodes(
     buffer: ReplayBuffer,
     epsilon: float,
     rng: np.random.Generator,
+    seeds: list[int | None] | None = None,
 ) -> list[float]:
     """
     One episode per environment, side by side, acting on one predicted map per episode.
 
-    Returns each episode's total reward.
+    `seeds` go to the environments' reset (None: they go on with their own RNG). Returns each
+    episode's total reward.
     """
-    obs = [env.reset()[0] for env in envs]
+    obs = [env.reset(seed=s)[0] for env, s in zip(envs, seeds or [None] * len(envs))]
     ids = [buffer.map_id(o['grid'], o['instruction']) for o in obs]
     maps = predicted_maps(model, vocab, [o['grid'] for o in obs], [o['instruction'] for o in obs])
     returns = [0.0] * len(envs)
@@ -270,11 +290,15 @@ def fitted_value_step(
     return loss.item()
 
 
-def make_envs(data: GroundingSet, cfg: RLConfig) -> list[GridWorldEnv]:
+def make_envs(data: GroundingSet, cfg: RLConfig) -> tuple[list[GridWorldEnv], list[int]]:
+    """
+    Return `cfg.envs` environments and the seeds of their first reset.
+
+    Environment n gets seed `cfg.seed + n * 2**32`, whose stream is that of
+    np.random.default_rng([cfg.seed, n]) (the same SeedSequence entropy words).
+    """
     envs = [GridWorldEnv(data, step_limit=cfg.step_limit) for _ in range(cfg.envs)]
-    for n, env in enumerate(envs):
-        env.rng = np.random.default_rng([cfg.seed, n])
-    return envs
+    return envs, [cfg.seed + (n << 32) for n in range(cfg.envs)]
 
 
 def train_rl(
@@ -300,14 +324,12 @@ def train_rl(
     train = train_data if train_data is not None else load_episodes(task, 'train', str(data_dir))
     test = test_data if test_data is not None else load_episodes(task, 'test', str(data_dir))
     shape = tuple(train.grids.shape[1:])
-    cfg = RLConfig(
-        **{
-            **asdict(cfg),
-            'step_limit': cfg.step_limit or 5 * max(shape),
-            'mirrors': TASK_SETTINGS.get(task, {}).get('mirrors', True)
-            if cfg.mirrors is None
-            else cfg.mirrors,
-        }
+    cfg = replace(
+        cfg,
+        step_limit=cfg.step_limit or 5 * max(shape),
+        mirrors=TASK_SETTINGS.get(task, {}).get('mirrors', True)
+        if cfg.mirrors is None
+        else cfg.mirrors,
     )
     # the mirror images' swapped direction words are trained on too
     vocab = Vocabulary.build(
@@ -325,7 +347,8 @@ def train_rl(
     model = build_model(model_name, mcfg)
     target_model = copy.deepcopy(model)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    envs = envs if envs is not None else make_envs(train, cfg)
+    # environments given (the ROS client) are seeded by whoever made them
+    envs, seeds = make_envs(train, cfg) if envs is None else (envs, None)
     buffer = ReplayBuffer(shape, cfg.mirrors)
     target_maps: dict[int, np.ndarray] = {}
     episodes, updates, log = 0, 0, []
@@ -340,7 +363,8 @@ def train_rl(
         progress_frac = episodes / max(1, cfg.eps_fraction * cfg.episodes)
         epsilon = cfg.eps_start + min(1.0, progress_frac) * (cfg.eps_end - cfg.eps_start)
         batch = envs[: max(1, min(len(envs), cfg.episodes - episodes))]
-        returns = run_episodes(batch, model, vocab, buffer, epsilon, rng)
+        returns = run_episodes(batch, model, vocab, buffer, epsilon, rng, seeds)
+        seeds = None  # seeded once, at the first reset
         episodes += len(batch)
         # 2. fitted value iteration on the replay buffer
         losses = []
@@ -394,228 +418,3 @@ def train_rl(
         return_history=[[e, round(r, 4), round(lo, 5)] for e, r, lo, _ in log],
     )
     return path, summary
-
-
-def cmd_rl_train(args) -> int:
-    cfg = RLConfig(
-        seed=args.seed,
-        threads=args.threads,
-        **{
-            k: v
-            for k, v in (
-                ('episodes', args.episodes),
-                ('envs', args.envs),
-                ('step_limit', args.step_limit),
-                ('updates_per_round', args.updates_per_round),
-                ('target_sync', args.target_sync),
-                ('batch_maps', args.batch_maps),
-                ('lr', args.lr),
-                ('mirrors', args.mirrors),
-                ('attention_warmup', args.attention_warmup),
-            )
-            if v is not None
-        },
-    )
-    train = test = None
-    if args.task.startswith('generator'):
-        train = load_episodes(args.task, n=args.generated, seed=args.seed)
-        test = load_episodes(args.task, n=max(50, args.generated // 5), seed=args.seed + 1000)
-    if args.via_ros:
-        from .ros.gridworld_client import ros_envs
-
-        with ros_envs(args.task, args.data, train, cfg, args.seed) as envs:
-            path, summary = train_rl(
-                args.task,
-                args.model,
-                args.data,
-                args.out,
-                cfg,
-                train,
-                test,
-                envs=envs,
-                progress=not args.quiet,
-            )
-    else:
-        path, summary = train_rl(
-            args.task, args.model, args.data, args.out, cfg, train, test, progress=not args.quiet
-        )
-    print(json.dumps({'checkpoint': str(path), **summary}))
-    return 0
-
-
-def register_cli(sub) -> None:
-    from .cli import DEFAULT_DATA
-
-    p = sub.add_parser('rl-train', help='train a model by RL (fitted value iteration)')
-    p.add_argument(
-        '--task',
-        required=True,
-        choices=[
-            *RL_TASKS,
-            *(t for t in TASKS if t not in RL_TASKS),
-            'generator-local',
-            'generator-global',
-            'generator-mixed',
-        ],
-    )
-    p.add_argument('--model', required=True, choices=list(MODELS))
-    p.add_argument('--data', default=DEFAULT_DATA)
-    p.add_argument('--out', default='out')
-    p.add_argument('--episodes', type=int, default=None)
-    p.add_argument('--envs', type=int, default=None, help='episodes side by side per round')
-    p.add_argument('--step-limit', type=int, default=None)
-    p.add_argument('--updates-per-round', type=int, default=None)
-    p.add_argument('--target-sync', type=int, default=None)
-    p.add_argument('--batch-maps', type=int, default=None)
-    p.add_argument('--lr', type=float, default=None)
-    p.add_argument(
-        '--mirrors',
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help='also learn from the mirror images of each map (default: on for PuddleWorld)',
-    )
-    p.add_argument(
-        '--attention-warmup',
-        type=float,
-        default=None,
-        help='share of episodes t-RNetAttn runs attention-free (default 0.85; 0: never)',
-    )
-    p.add_argument(
-        '--generated',
-        type=int,
-        default=500,
-        help='number of generated training examples (generator-* tasks)',
-    )
-    p.add_argument('--seed', type=int, default=0)
-    p.add_argument('--threads', type=int, default=1)
-    p.add_argument(
-        '--via-ros', action='store_true', help="run episodes through the gridworld node's topics"
-    )
-    p.add_argument('--quiet', action='store_true')
-    p.set_defaults(func=cmd_rl_train)
-
-    r = sub.add_parser(
-        'reproduce-rl',
-        help="RL rows of the paper's table: train, evaluate, write rl.json and rl.md",
-    )
-    r.add_argument('--data', default=DEFAULT_DATA)
-    r.add_argument('--out', default='results')
-    r.add_argument('--checkpoints', default='out', help='where the RL checkpoints go')
-    r.add_argument('--tasks', nargs='+', default=list(RL_TASKS), choices=RL_TASKS)
-    r.add_argument('--models', nargs='+', default=['t-rnet-attn', 't-cnn'], choices=list(MODELS))
-    r.add_argument(
-        '--episodes-scale',
-        type=float,
-        default=1.0,
-        help='multiply every episode budget (e.g. 0.05 for a quick check)',
-    )
-    r.add_argument('--jobs', type=int, default=2, help='runs in parallel, one thread each')
-    r.set_defaults(func=cmd_reproduce_rl)
-
-
-# --- reproduction of the paper's RL rows -------------------------------------------------
-
-# The paper's Table (RL, test split): (PQ, MD) per model and task.
-PAPER_RL = {
-    't-cnn': {'pw-local': (0.89, 2.03), 'pw-global': (0.91, 3.80), 'isi': (0.74, 3.94)},
-    't-uvfa': {'pw-local': (0.56, 4.71), 'pw-global': (0.62, 6.28), 'isi': (0.15, 4.61)},
-    't-rnet-attn': {'pw-local': (0.91, 2.10), 'pw-global': (0.93, 4.23), 'isi': (0.84, 3.79)},
-}
-# Episode budgets per task for `reproduce-rl`, the same for every model, sized for about an
-# hour on 2 cores. t-RNetAttn costs most: ISI's long instructions make its attention
-# phase (the last 15% of episodes) the slowest part.
-RL_EPISODES = {'pw-local': 16_000, 'pw-global': 16_000, 'isi': 12_000}
-# relative cost per episode, to start the longest runs first
-RL_COST = {'t-rnet-attn': 10, 't-rnet': 3, 't-cnn': 1, 't-uvfa': 1}
-
-
-def rl_table(results: list[dict]) -> str:
-    """Markdown: ours beside the paper's PQ / MD."""
-    lines = [
-        '| task | model | PQ ours | PQ paper | MD ours | MD paper | episodes | minutes |',
-        '| --- | --- | --- | --- | --- | --- | --- | --- |',
-    ]
-    for r in results:
-        pq, md = PAPER_RL.get(r['model'], {}).get(r['task'], (None, None))
-        lines.append(
-            f'| {r["task"]} | {r["model"]} | {r["test"]["pq"]:.2f} | '
-            f'{"-" if pq is None else f"{pq:.2f}"} | {r["test"]["md"]:.2f} | '
-            f'{"-" if md is None else f"{md:.2f}"} | {r["episodes"]} | '
-            f'{r["train_seconds"] / 60:.1f} |'
-        )
-    return '\n'.join(lines) + '\n'
-
-
-def reproduce_rl(
-    data_dir: str,
-    out: str,
-    tasks=RL_TASKS,
-    models=('t-rnet-attn', 't-cnn'),
-    scale: float = 1.0,
-    jobs: int = 2,
-    checkpoints: str = 'out',
-) -> list[dict]:
-    """
-    Train every (model, task) by RL in `jobs` parallel processes.
-
-    Train every (model, task) by RL in `jobs` parallel processes (one thread each), write
-    out/rl.json and out/rl.md.
-    """
-    from concurrent.futures import ProcessPoolExecutor
-
-    runs = sorted(
-        ((m, t) for m in models for t in tasks),
-        key=lambda mt: -RL_EPISODES[mt[1]] * RL_COST[mt[0]] * (3 if mt[1] == 'isi' else 1),
-    )
-    cfgs = [RLConfig(episodes=max(1, int(RL_EPISODES[t] * scale))) for m, t in runs]
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [
-            pool.submit(train_rl, t, m, data_dir, checkpoints, cfg, progress=False)
-            for (m, t), cfg in zip(runs, cfgs)
-        ]
-        results = []
-        for (m, t), f in zip(runs, futures):
-            path, summary = f.result()
-            print(
-                f'{t} {m}: PQ {summary["test"]["pq"]:.3f}  MD {summary["test"]["md"]:.2f}  '
-                f'({summary["train_seconds"] / 60:.1f} min) -> {path}',
-                flush=True,
-            )
-            results.append({**summary, 'checkpoint': str(path)})
-    # rows of earlier runs (other tasks or models) stay; the ones run now replace theirs
-    path = Path(out) / 'rl.json'
-    earlier = json.loads(path.read_text())['results'] if path.is_file() else []
-    rows = {(r['task'], r['model']): r for r in [*earlier, *results]}
-    order = {t: i for i, t in enumerate(RL_TASKS)}
-    results = sorted(rows.values(), key=lambda r: (order.get(r['task'], 9), r['model']))
-    Path(out).mkdir(parents=True, exist_ok=True)
-    path.write_text(
-        json.dumps(
-            {
-                'command': f'spatial-grounding reproduce-rl --data {data_dir} --out {out}',
-                'paper': PAPER_RL,
-                'results': results,
-            },
-            indent=2,
-        )
-        + '\n'
-    )
-    (Path(out) / 'rl.md').write_text(
-        'RL goal navigation (fitted value iteration, rewards only), test split; paper = '
-        'Yang et al. 2020 Table 1.\n\n' + rl_table(results)
-    )
-    print(rl_table(results))
-    return results
-
-
-def cmd_reproduce_rl(args) -> int:
-    reproduce_rl(
-        args.data,
-        args.out,
-        args.tasks,
-        args.models,
-        args.episodes_scale,
-        args.jobs,
-        args.checkpoints,
-    )
-    return 0

@@ -94,7 +94,7 @@ def make_probe(context, namespace: str, grounder_name: str):
     from rcl_interfaces.msg import Log
     from rclpy.node import Node
     from spatial_grounding_ros.ros import convert
-    from spatial_grounding_ros.ros.grounder_node import LATCHED
+    from spatial_grounding_ros.ros.qos import LATCHED
     from std_msgs.msg import Float32MultiArray, Header, String
 
     logger_name = grounder_name.strip('/').replace('/', '.')  # how /rosout names its lines

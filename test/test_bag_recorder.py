@@ -36,7 +36,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E
 from rclpy.serialization import serialize_message  # noqa: E402
 from spatial_grounding_ros.bags import open_bag, typestore  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
-from spatial_grounding_ros.ros.bag_recorder import BagRecorder, LATCHED_QOS  # noqa: E402
+from spatial_grounding_ros.ros.bag_recorder import BagRecorder  # noqa: E402
+from spatial_grounding_ros.ros.qos import LATCHED  # noqa: E402
 from std_msgs.msg import Header, String  # noqa: E402
 
 INFINITE = {'sec': 9223372036, 'nsec': 854775807}  # RMW_DURATION_INFINITE
@@ -55,7 +56,7 @@ def test_recorded_qos_type_hashes_and_distro_are_what_ros2_bag_record_writes(
     graph = ros_context
     namespace = unique_namespace('recorder_test')
     source = graph.add(Node('source', namespace=namespace, context=graph.context))
-    map_pub = source.create_publisher(OccupancyGrid, 'entity_map', LATCHED_QOS)
+    map_pub = source.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
     # latched like the gridworld's instruction, with a deadline: the recorder subscribes
     # volatile, so only the publisher's own QoS can put transient_local and 5 s in the bag
     text_qos = QoSProfile(

@@ -106,3 +106,38 @@ def test_corrupt_and_foreign_checkpoints_are_one_line(tmp_path, data_dir):
         'isi_t-cnn.pt',
         'entity table',
     )
+
+
+@pytest.mark.parametrize(
+    'option, value, needle',
+    [
+        ('--episodes', '-3', 'argument --episodes: must be at least 0, got -3'),
+        ('--envs', '0', 'argument --envs: must be at least 1, got 0'),
+        ('--gamma', '1.5', 'argument --gamma: must be 0..1, got 1.5'),
+        ('--batch-maps', 'many', "argument --batch-maps: invalid int value: 'many'"),
+    ],
+)
+def test_rl_train_refuses_an_option_out_of_its_range(option, value, needle):
+    """Each range is declared once, in RLConfig: the command refuses before any work."""
+    r = run('rl-train', '--task', 'generator-local', '--model', 't-cnn', option, value)
+    assert_one_line_error(r, needle)
+
+
+def test_rl_options_are_the_config_fields():
+    """`rl-train` has one option per RLConfig field, with the field's default and help."""
+    from dataclasses import fields
+
+    from spatial_grounding_ros.cli import build_parser
+    from spatial_grounding_ros.options import from_options
+    from spatial_grounding_ros.rl import RLConfig
+
+    args = build_parser().parse_args(['rl-train', '--task', 'pw', '--model', 't-cnn'])
+    assert from_options(RLConfig, args) == RLConfig()
+    assert RLConfig().episodes == 16_000  # the README's RL table ran with this default
+    args = build_parser().parse_args(
+        ['rl-train', '--task', 'pw', '--model', 't-cnn', '--no-mirrors', '--step-limit', '7']
+    )
+    assert from_options(RLConfig, args) == RLConfig(mirrors=False, step_limit=7)
+    assert all(f.metadata['help'] for f in fields(RLConfig))
+    with pytest.raises(ValueError, match='envs must be at least 1, got 0'):
+        RLConfig(envs=0)

@@ -7,10 +7,11 @@
 """
 The RL environment.
 
-Rewards and termination come from the example's maps, moves from world.step_cell, and the true
-values never reach the observation.
+A Gymnasium environment (gymnasium's own env checker passes); rewards and termination come from
+the example's maps, moves from world.step_cell, and the true values never reach the observation.
 """
 
+from gymnasium.utils.env_checker import check_env
 import numpy as np
 import pytest
 from spatial_grounding_ros import world
@@ -31,9 +32,32 @@ def test_reset_observation_has_no_values(data):
     assert not data.terminal[info['example']][obs['agent']]  # never starts on the goal
 
 
+def test_gymnasium_env_checker_passes(data):
+    """Gymnasium's own checker: spaces, reset(seed=) determinism, the step 5-tuple."""
+    env = GridWorldEnv(data)
+    check_env(env, skip_render_check=True)
+    assert env.action_space.n == 4
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+
+
+def test_reset_seed_sets_the_rng_and_observations_are_copies(data):
+    env = GridWorldEnv(data)
+    first = [env.reset(seed=7)] + [env.reset() for _ in range(5)]
+    again = [env.reset(seed=7)] + [env.reset() for _ in range(5)]
+    assert [(i['example'], o['agent']) for o, i in first] == [
+        (i['example'], o['agent']) for o, i in again
+    ]
+    obs, info = env.reset(seed=0)
+    obs['grid'][:] = -1  # changing an observation leaves the data set alone
+    assert (data.grids[info['example']] >= 0).all()
+    with pytest.raises(ValueError, match='unknown reset option'):
+        env.reset(options={'exemple': 0})
+
+
 def test_walk_to_goal_collects_rewards_and_terminates(data):
     env = GridWorldEnv(data, step_limit=100)
-    env.reset(seed=1, example=4, start=(0, 0))
+    env.reset(seed=1, options={'example': 4, 'start': (0, 0)})
     goal = env.goal
     expected = 0.0
     policy = world.greedy_policy(data.values[4])  # the optimal policy reaches the goal
@@ -55,7 +79,7 @@ def test_walk_to_goal_collects_rewards_and_terminates(data):
 
 def test_off_map_stays_put_and_step_limit_truncates(data):
     env = GridWorldEnv(data, step_limit=3)
-    env.reset(example=0, start=(0, 0))
+    env.reset(options={'example': 0, 'start': (0, 0)})
     if env.goal == (0, 0):
         pytest.skip('goal in the corner')
     for i in range(3):
@@ -75,7 +99,7 @@ def test_puddle_reward_is_minus_one(data):
     for a, (dr, dc) in enumerate(world.ACTIONS):
         start = (cell[0] - dr, cell[1] - dc)
         if 0 <= start[0] < 10 and 0 <= start[1] < 10 and not data.terminal[i][start]:
-            env.reset(example=i, start=start)
+            env.reset(options={'example': i, 'start': start})
             _, reward, _, _, _ = env.step(a)
             assert reward == -1.0
             return
@@ -86,13 +110,13 @@ def test_bad_input(data):
     env = GridWorldEnv(data)
     with pytest.raises(RuntimeError):
         env.step(0)
-    env.reset(example=0)
+    env.reset(options={'example': 0})
     with pytest.raises(ValueError):
         env.step(4)
     with pytest.raises(ValueError):
-        env.reset(example=len(data))
+        env.reset(options={'example': len(data)})
     with pytest.raises(ValueError):
-        env.reset(example=0, start=(10, 0))
+        env.reset(options={'example': 0, 'start': (10, 0)})
     with pytest.raises(ValueError):
         GridWorldEnv(data, step_limit=0)
 
@@ -121,3 +145,4 @@ def test_puddleworld_episodes(data_dir):
     )
     _, reward, _, _, _ = env.step(3)
     assert reward == data.rewards[i][env.agent]
+    check_env(env, skip_render_check=True)  # human instructions: the space holds their text

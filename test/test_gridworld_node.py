@@ -27,7 +27,8 @@ from rclpy.parameter import Parameter
 from spatial_grounding_ros import world
 from spatial_grounding_ros.generator import generate
 from spatial_grounding_ros.ros import convert
-from spatial_grounding_ros.ros.gridworld_node import GridWorldNode, LATCHED, STEPS
+from spatial_grounding_ros.ros.gridworld_node import GridWorldNode
+from spatial_grounding_ros.ros.qos import LATCHED, STREAM
 from std_msgs.msg import Bool, Float32, Float32MultiArray, Int32, String
 from std_srvs.srv import Trigger
 
@@ -77,11 +78,11 @@ class Probe(rclpy.node.Node):
         sub(String, 'instruction', self.got['instruction'].append, LATCHED)
         sub(PoseStamped, 'true_goal', self.got['goal'].append, LATCHED)
         sub(Float32MultiArray, 'true_value_map', self.got['values'].append, LATCHED)
-        sub(PoseStamped, 'agent_pose', self.got['pose'].append, STEPS)
-        sub(Float32, 'reward', self.got['reward'].append, STEPS)
-        sub(Bool, 'terminated', self.got['terminated'].append, STEPS)
+        sub(PoseStamped, 'agent_pose', self.got['pose'].append, STREAM)
+        sub(Float32, 'reward', self.got['reward'].append, STREAM)
+        sub(Bool, 'terminated', self.got['terminated'].append, STREAM)
         sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 10)
-        self.action = self.create_publisher(Int32, 'action', STEPS)
+        self.action = self.create_publisher(Int32, 'action', STREAM)
         self.goal = self.create_publisher(PoseStamped, 'goal_pose', 10)
         self.next = self.create_client(Trigger, 'next_episode')
         self.reset = self.create_client(Trigger, 'reset_episode')

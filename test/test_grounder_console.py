@@ -83,7 +83,7 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path):
         f'checkpoint:={tmp_path / "missing.pt"}': 'missing.pt: checkpoint not found',
         f'checkpoint:={corrupt}': 'corrupt.pt: not a readable checkpoint',
         'entity_table:=entities_isi.yaml': (
-            'is not the one checkpoint pw_t-rnet-attn was trained on'
+            'pw_t-rnet-attn.pt: checkpoint was trained on the puddleworld entity table'
         ),
         'entity_table:=no_such_table.yaml': 'no_such_table.yaml: config file not found',
         # parameters are checked against their declared type and range before anything loads

@@ -21,14 +21,8 @@ from spatial_grounding_ros.augment import mirror
 from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.env import GridWorldEnv, load_episodes
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.rl import (
-    act,
-    fitted_value_step,
-    ReplayBuffer,
-    reproduce_rl,
-    RLConfig,
-    train_rl,
-)
+from spatial_grounding_ros.reproduce import reproduce_rl
+from spatial_grounding_ros.rl import act, fitted_value_step, ReplayBuffer, RLConfig, train_rl
 from spatial_grounding_ros.text import tokenize, Vocabulary
 import torch
 
@@ -188,8 +182,7 @@ def test_rl_train_via_ros_equals_the_in_process_run(tmp_path, capsys):
     train = load_episodes('generator-local', n=20, seed=0)  # as rl-train makes them
     test = load_episodes('generator-local', n=50, seed=1000)
     env = GridWorldEnv(train, step_limit=10)
-    env.rng = np.random.default_rng(0)  # as the node seeds it
-    env.reset()  # the node's first episode
+    env.reset(seed=0)  # the node's first episode, seeded as the node seeds it
     cfg = RLConfig(episodes=6, step_limit=10, seed=0, threads=1)
     path, in_process = train_rl(
         'generator-local',

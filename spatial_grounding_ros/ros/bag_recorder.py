@@ -26,15 +26,10 @@ import threading
 
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
+from .qos import LATCHED, STREAM
 from ..bags import BagWriter, duration
-
-LATCHED_QOS = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
-STREAM_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def message_class(msgtype: str):
@@ -94,7 +89,7 @@ class BagRecorder(Node):
                 lambda data, info, full=full, msgtype=msgtype: self.record(
                     full, msgtype, data, info
                 ),
-                LATCHED_QOS if topic in latched else STREAM_QOS,
+                LATCHED if topic in latched else STREAM,
                 raw=True,
             )
 

@@ -7,10 +7,8 @@
 """
 Conversions between grids / value maps and ROS messages. Pure functions, no node.
 
-Orientation (DESIGN "ROS interface"): a data-set grid's row 0 is the north (top) row, while
-an OccupancyGrid's row index grows with +y (row 0 sits at the map origin). So data-set row r
-is OccupancyGrid row height-1-r, and "northernmost" means largest y in the map frame.
-Cell centres go through the full origin pose (position and rotation) and the resolution.
+Orientation: a data-set grid's row 0 is the north (top) row, OccupancyGrid row 0 the south one
+at the map origin (map_geometry.py, which also holds cell_centre and point_to_cell, says how).
 """
 
 from __future__ import annotations
@@ -19,33 +17,18 @@ import array
 import math
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Pose, PoseStamped
+from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 import numpy as np
 from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 
-from ..bags import multiarray_to_map
+# the ROS side reads the geometry through this module: convert.cell_centre, convert.point_to_cell
+from ..map_geometry import cell_centre, multiarray_to_map, origin_quaternion
+from ..map_geometry import point_to_cell  # noqa: F401
 
 PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
 # value_map cells: best = 100 (display) or best = 0 (cost, as a costmap reads it)
 VALUE_MAP_ENCODINGS = ('display', 'cost')
-
-
-def _quaternion(pose: Pose) -> np.ndarray:
-    """(x, y, z, w) of a pose's orientation, normalised; ValueError if it is not a rotation."""
-    o = pose.orientation
-    q = np.array([o.x, o.y, o.z, o.w], dtype=np.float64)
-    norm = float(np.linalg.norm(q))
-    if not np.isfinite(q).all() or norm < 1e-9:
-        raise ValueError(f'map origin orientation {q.tolist()} is not a valid quaternion')
-    return q / norm
-
-
-def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate 3-vector(s) v (..., 3) by the unit quaternion q = (x, y, z, w)."""
-    u, w = q[:3], q[3]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
 
 
 def check_map_info(info: MapMetaData, max_cells: int) -> None:
@@ -65,7 +48,7 @@ def check_map_info(info: MapMetaData, max_cells: int) -> None:
     p = info.origin.position
     if not all(math.isfinite(c) for c in (p.x, p.y, p.z)):
         raise ValueError(f'map origin position ({p.x}, {p.y}, {p.z}) is not finite')
-    _quaternion(info.origin)
+    origin_quaternion(info.origin)
 
 
 def occupancy_grid_to_grid(msg: OccupancyGrid, max_cells: int) -> np.ndarray:
@@ -193,19 +176,6 @@ def float32_multiarray_to_value_map(msg: Float32MultiArray) -> np.ndarray:
     return multiarray_to_map(msg)
 
 
-def cell_centre(cell: tuple[int, int], info: MapMetaData) -> tuple[float, float, float]:
-    """(x, y, z) in the map frame of the centre of data-set cell (row, col), row 0 = north."""
-    row, col = cell
-    if not (0 <= row < info.height and 0 <= col < info.width):
-        raise ValueError(f'cell {cell} is outside the {info.height}x{info.width} map')
-    local = np.array(
-        [(col + 0.5) * info.resolution, (info.height - 1 - row + 0.5) * info.resolution, 0.0]
-    )
-    p = info.origin.position
-    x, y, z = _rotate(_quaternion(info.origin), local) + np.array([p.x, p.y, p.z])
-    return float(x), float(y), float(z)
-
-
 def cell_to_pose(
     cell: tuple[int, int], info: MapMetaData, frame_id: str, stamp: Time
 ) -> PoseStamped:
@@ -220,16 +190,3 @@ def cell_to_pose(
     pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = cell_centre(cell, info)
     pose.pose.orientation.w = 1.0
     return pose
-
-
-def point_to_cell(x: float, y: float, info: MapMetaData) -> tuple[int, int] | None:
-    """Data-set (row, col) of the cell holding map-frame point (x, y), or None off the map."""
-    p = info.origin.position
-    local = _rotate(
-        _quaternion(info.origin) * np.array([-1, -1, -1, 1]), np.array([x - p.x, y - p.y, 0.0])
-    )
-    col = math.floor(local[0] / info.resolution)
-    grid_row = math.floor(local[1] / info.resolution)
-    if not (0 <= col < info.width and 0 <= grid_row < info.height):
-        return None
-    return info.height - 1 - grid_row, col

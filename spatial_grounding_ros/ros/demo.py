@@ -24,7 +24,6 @@ import os
 from pathlib import Path
 import shutil
 import subprocess
-import sys
 import time
 
 from geometry_msgs.msg import PoseStamped
@@ -38,13 +37,14 @@ from std_srvs.srv import Trigger
 
 from . import convert
 from .bag_recorder import RecordingThread
-from .gridworld_node import LATCHED, STEPS
-from .node_support import stop_processes
+from .processes import executable, stop_processes
+from .qos import LATCHED, STREAM
 from ..bags import evaluate_bag
+from ..datasets import DEFAULT_DATA
 from ..entities import PUDDLEWORLD
 from ..plots import plot_grounding
 
-RECORDED = {  # topic -> type; the first six are latched
+RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
     'entity_map': 'nav_msgs/msg/OccupancyGrid',
     'instruction': 'std_msgs/msg/String',
     'true_goal': 'geometry_msgs/msg/PoseStamped',
@@ -71,15 +71,6 @@ LATCHED_TOPICS = {
 }
 
 
-def executable(name: str) -> list[str]:
-    """Return the console script next to this Python (a venv's bin), else `python -m`."""
-    script = Path(sys.executable).parent / name
-    if script.is_file():
-        return [str(script)]
-    module = {'gridworld': 'gridworld_node', 'grounder': 'grounder_node'}[name]
-    return [sys.executable, '-m', f'spatial_grounding_ros.ros.{module}']
-
-
 class DemoWatcher(Node):
     """Follows one episode at a time: the goal the grounder sent, the agent's moves."""
 
@@ -96,9 +87,9 @@ class DemoWatcher(Node):
         self.true_goal: PoseStamped | None = None
         self.instruction = ''
         self.create_subscription(PoseStamped, 'goal_pose', self.goals.append, 10)
-        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STEPS)
-        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STEPS)
-        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
+        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STREAM)
+        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STREAM)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STREAM)
         self.create_subscription(
             OccupancyGrid, 'entity_map', lambda m: setattr(self, 'map_msg', m), LATCHED
         )
@@ -176,7 +167,7 @@ def run_demo(
     out: str | Path,
     episodes: int = 5,
     seed: int = 7,
-    data_dir: str = '../shared/data',
+    data_dir: str = DEFAULT_DATA,
     step_period: float = 0.05,
     step_limit: int = 40,
 ) -> dict:
@@ -371,8 +362,6 @@ def cmd_closed_loop_demo(args) -> int:
 
 
 def register_cli(sub) -> None:
-    from ..cli import DEFAULT_DATA
-
     d = sub.add_parser(
         'demo', help='gridworld + grounder nodes in a closed loop, recorded to a bag'
     )

@@ -5,10 +5,12 @@
 # https://opensource.org/licenses/MIT.
 
 """
-A GridWorldEnv-shaped client of the gridworld node, so rl.py's loop runs unchanged through topics.
+A client of the gridworld node with env.GridWorldEnv's interface, so rl.py's loop runs unchanged.
 
 reset() calls next_episode and reads entity_map, instruction and agent_pose; step() publishes an
-action and waits for that move's agent_pose, reward and terminated.
+action and waits for that move's agent_pose, reward and terminated. Observations and the 5-tuple
+of step() are GridWorldEnv's; the world's RNG is the node's (its `seed` parameter), so reset()
+takes no seed and no options.
 
 Messages of different topics may arrive in any order, so the client pairs them by count:
 the node publishes exactly one agent_pose, reward and terminated per move.
@@ -23,6 +25,7 @@ import sys
 import time
 
 from geometry_msgs.msg import PoseStamped
+from gymnasium import spaces
 from nav_msgs.msg import OccupancyGrid
 import rclpy
 from rclpy.node import Node
@@ -30,8 +33,9 @@ from std_msgs.msg import Bool, Float32, Int32, String
 from std_srvs.srv import Trigger
 
 from . import convert
-from .gridworld_node import LATCHED, STEPS
-from .node_support import stop_processes
+from .processes import stop_processes
+from .qos import LATCHED, STREAM
+from ..world import ACTIONS
 
 
 class GridWorldClient(Node):
@@ -48,10 +52,11 @@ class GridWorldClient(Node):
         self.terminals: list[bool] = []
         self.create_subscription(OccupancyGrid, 'entity_map', self.on_map, LATCHED)
         self.create_subscription(String, 'instruction', self.on_instruction, LATCHED)
-        self.create_subscription(PoseStamped, 'agent_pose', self.on_pose, STEPS)
-        self.create_subscription(Float32, 'reward', self.on_reward, STEPS)
-        self.create_subscription(Bool, 'terminated', self.on_terminated, STEPS)
-        self.action_pub = self.create_publisher(Int32, 'action', STEPS)
+        self.create_subscription(PoseStamped, 'agent_pose', self.on_pose, STREAM)
+        self.create_subscription(Float32, 'reward', self.on_reward, STREAM)
+        self.create_subscription(Bool, 'terminated', self.on_terminated, STREAM)
+        self.action_pub = self.create_publisher(Int32, 'action', STREAM)
+        self.action_space = spaces.Discrete(len(ACTIONS))
         self.next_client = self.create_client(Trigger, 'next_episode')
         self.steps = 0
         self.done = True
@@ -92,7 +97,12 @@ class GridWorldClient(Node):
         grid = convert.occupancy_grid_to_grid(self.map_msg, max_cells=10**7)
         return {'grid': grid, 'instruction': self.instruction, 'agent': agent}
 
-    def reset(self, seed=None) -> tuple[dict, dict]:
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
+        if seed is not None or options:
+            raise ValueError(
+                "the gridworld node's episodes are seeded by its seed parameter and chosen by "
+                'its services: reset() takes no seed or options'
+            )
         self.wait_for('next_episode service', lambda: self.next_client.service_is_ready())
         before = dict(self.counts)
         future = self.next_client.call_async(Trigger.Request())

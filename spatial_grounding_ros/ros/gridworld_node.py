@@ -29,24 +29,17 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 import numpy as np
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Bool, Float32, Float32MultiArray, Header, Int32, String
 from std_srvs.srv import Trigger
 
 from . import convert
 from .node_support import declare_parameters, Param, report, spin
+from .qos import LATCHED, STREAM
 from .. import world
-from ..datasets import SPLITS, TASKS
-from ..env import GridWorldEnv, load_episodes
+from ..datasets import DEFAULT_DATA, SPLITS, TASKS
+from ..env import GENERATED, GridWorldEnv, load_episodes
 
 NODE_NAME = 'gridworld'
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
-# One message per move on agent_pose / reward / terminated: deep enough that a client
-# pairing them by count never loses one.
-STEPS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-GENERATED = ('generator', 'generator-local', 'generator-global')
 
 # Everything here shapes the episodes or the timer made at start-up: read-only.
 PARAMETERS = (
@@ -64,7 +57,7 @@ PARAMETERS = (
     ),
     Param(
         'data_dir',
-        '../shared/data',
+        DEFAULT_DATA,
         'folder of the data sets (task sources only)',
         read_only=True,
         non_empty=True,
@@ -146,7 +139,6 @@ class GridWorldNode(Node):
         self.env = GridWorldEnv(
             data, step_limit=self.param('step_limit'), order=self.param('order')
         )
-        self.env.rng = np.random.default_rng(self.param('seed'))
         self.obstacles = np.isin(data.grids, data.entities.obstacles)
         self.info = convert.map_info(
             self.env.shape,
@@ -166,11 +158,11 @@ class GridWorldNode(Node):
         self.true_rewards_pub = self.create_publisher(
             Float32MultiArray, 'true_reward_map', LATCHED
         )
-        self.pose_pub = self.create_publisher(PoseStamped, 'agent_pose', STEPS)
-        self.reward_pub = self.create_publisher(Float32, 'reward', STEPS)
-        self.terminated_pub = self.create_publisher(Bool, 'terminated', STEPS)
+        self.pose_pub = self.create_publisher(PoseStamped, 'agent_pose', STREAM)
+        self.reward_pub = self.create_publisher(Float32, 'reward', STREAM)
+        self.terminated_pub = self.create_publisher(Bool, 'terminated', STREAM)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(Int32, 'action', self.on_action, STEPS)
+        self.create_subscription(Int32, 'action', self.on_action, STREAM)
         self.create_subscription(PoseStamped, 'goal_pose', self.on_goal_pose, 10)
         self.create_service(Trigger, 'reset_episode', self.on_reset)
         self.create_service(Trigger, 'next_episode', self.on_next)
@@ -205,7 +197,11 @@ class GridWorldNode(Node):
 
     def start_episode(self, example: int | None) -> None:
         """Reset the environment (the next episode, or `example` again) and publish it."""
-        self.env.reset(example=example)
+        # the first episode seeds the environment (its start cells and random order)
+        self.env.reset(
+            seed=self.param('seed') if self.env.example < 0 else None,
+            options=None if example is None else {'example': example},
+        )
         self.path_policy = self.path_goal = None
         i, header = self.env.example, self.header()
         self.map_pub.publish(convert.grid_to_occupancy_grid(self.env.grid, header, self.info))

@@ -40,22 +40,18 @@ from rclpy.lifecycle import (
     TransitionCallbackReturn,
 )
 from rclpy.publisher import Publisher
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float32MultiArray, Header, String
 import torch
 
 from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .package_files import find_config
-from ..checkpoints import resolve_checkpoint
+from .qos import LATCHED
+from ..checkpoints import load_checkpoint, resolve_checkpoint
 from ..entities import EntityTable
 from ..grounder import DEFAULT_CHECKPOINT, Grounder
 
 NODE_NAME = 'spatial_grounder'
-# Like /map: a late subscriber (RViz, this node) still gets the latest map.
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
 
 PARAMETERS = (
     Param(
@@ -221,15 +217,9 @@ class GrounderNode(LifecycleNode):
     def load_model(self) -> None:
         if self.param('torch_threads') > 0:
             torch.set_num_threads(self.param('torch_threads'))
-        grounder = Grounder.from_checkpoint(self.param('checkpoint'))
         table_path = find_config(self.param('entity_table'))
         table = EntityTable.from_yaml(table_path)
-        if table.names != grounder.entities.names:
-            raise ValueError(
-                f'entity table {table_path} ({table.domain}, {len(table)} kinds) is '
-                f'not the one checkpoint {self.param("checkpoint")} was trained on '
-                f'({grounder.entities.domain}, {len(grounder.entities)} kinds)'
-            )
+        grounder = Grounder(load_checkpoint(self.param('checkpoint'), expect_entities=table))
         self.grounder = grounder
         self.get_logger().info(
             f'model {grounder.loaded.name} from '

@@ -20,7 +20,6 @@ from dataclasses import dataclass
 import faulthandler
 import math
 import os
-import subprocess
 import sys
 from typing import Callable, Iterable, NoReturn
 
@@ -37,6 +36,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from std_msgs.msg import Header
+
+from .processes import stop_processes  # noqa: F401 (ros/bench_ros.py imports it from here)
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
@@ -223,15 +224,3 @@ def _run(make_node: Callable[[], Node], name: str, args: list[str] | None) -> in
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
-
-
-def stop_processes(*processes: subprocess.Popen, timeout: float = 10.0) -> None:
-    """Ask node processes to exit (SIGTERM), then kill whichever is still up after `timeout`."""
-    for p in processes:
-        p.terminate()
-    for p in processes:
-        try:
-            p.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()

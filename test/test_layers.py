@@ -1,0 +1,109 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The package's import layers.
+
+Every import statement of the package (at the top of a module or inside a function) is read
+from the source: no module may import itself back through others, nothing imports cli.py (the
+one top floor), and only modules under ros/ import rclpy, so the core runs without ROS.
+"""
+
+import ast
+from pathlib import Path
+
+PACKAGE = 'spatial_grounding_ros'
+ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT.parent).with_suffix('').parts
+    return '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
+
+
+def imports(path: Path) -> set[str]:
+    """Return the absolute names of the modules `path` imports, wherever the statement is."""
+    here = module_name(path)
+    package = here if path.name == '__init__.py' else here.rpartition('.')[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ''
+            if node.level:
+                anchor = package.split('.')[: len(package.split('.')) - (node.level - 1)]
+                base = '.'.join(anchor + ([node.module] if node.module else []))
+            # `from . import world` imports the module spatial_grounding_ros.world
+            found.update(
+                f'{base}.{alias.name}' if f'{base}.{alias.name}' in MODULES else base
+                for alias in node.names
+            )
+    return found
+
+
+FILES = sorted(ROOT.rglob('*.py'))
+MODULES = {module_name(f) for f in FILES}
+
+
+def package_graph() -> dict[str, set[str]]:
+    return {module_name(f): imports(f) & MODULES for f in FILES}
+
+
+def test_the_parser_sees_the_known_imports():
+    graph = package_graph()
+    assert f'{PACKAGE}.world' in graph[f'{PACKAGE}.env']
+    assert f'{PACKAGE}.datasets' in graph[f'{PACKAGE}.cli']
+    assert f'{PACKAGE}.ros.convert' in graph[f'{PACKAGE}.ros.gridworld_node']
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str]:
+    """Return one import cycle as a path (first module = last), or [] (depth-first search)."""
+    done, stack = set(), []
+
+    def visit(module):
+        stack.append(module)
+        for dep in sorted(graph[module] - {module}):
+            if dep in stack:
+                return stack[stack.index(dep):] + [dep]
+            if dep not in done:
+                cycle = visit(dep)
+                if cycle:
+                    return cycle
+        done.add(stack.pop())
+        return []
+
+    for module in sorted(graph):
+        cycle = [] if module in done else visit(module)
+        if cycle:
+            return cycle
+    return []
+
+
+def test_cycle_finder_finds_a_cycle():
+    assert find_cycle({'a': {'b'}, 'b': {'c'}, 'c': {'a'}, 'd': {'a'}}) == ['a', 'b', 'c', 'a']
+    assert find_cycle({'a': {'b', 'c'}, 'b': {'c'}, 'c': set()}) == []
+
+
+def test_no_import_cycle():
+    cycle = find_cycle(package_graph())
+    assert not cycle, 'import cycle: ' + ' -> '.join(cycle)
+
+
+def test_cli_is_the_top_floor():
+    graph = package_graph()
+    importers = sorted(m for m, deps in graph.items() if f'{PACKAGE}.cli' in deps)
+    assert not importers, f'{importers} import cli; take what they need from a lower module'
+
+
+def test_rclpy_only_under_ros():
+    outside = sorted(
+        module_name(f)
+        for f in FILES
+        if not module_name(f).startswith(f'{PACKAGE}.ros')
+        and any(m.split('.')[0] in ('rclpy', 'rosidl_runtime_py') for m in imports(f))
+    )
+    assert not outside, f'{outside} import rclpy outside ros/'
