@@ -62,7 +62,7 @@ _PW = {
     'mirrors': True,
     'attention_warmup': 0.85,
     'goal_weight': 1.0,
-    'model': {},
+    'model': {'axial': True},  # map-wide row and column views in the head
 }
 TASK_SETTINGS = {
     'pw-local': dict(_PW, epochs=40),

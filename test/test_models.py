@@ -11,6 +11,7 @@ from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
 from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
 from spatial_grounding_ros.models import (
+    axial_views,
     build_model,
     ModelConfig,
     MODELS,
@@ -77,6 +78,37 @@ def test_any_map_size(shape):
     assert values.shape == (2, *shape) and aux['relation_map'].shape == (2, *shape)
     torch.testing.assert_close(aux['attention'].sum(-1), torch.ones(2))
     assert aux['attention'][1, 1:].abs().max() == 0  # no attention on padding
+
+
+def test_axial_views_are_the_map_wide_maxima_they_name():
+    x = torch.randn(2, 3, 5, 7)
+    views = axial_views(x).unflatten(1, (6, 3))  # (B, view, C, H, W)
+    low = x.amin(dim=(2, 3))
+    for r in range(5):
+        for c in range(7):
+            def beyond(part):
+                return part.amax(dim=(2, 3)) if part.numel() else low
+
+            expected = [
+                x[:, :, r].amax(-1),
+                x[:, :, :, c].amax(-1),
+                beyond(x[:, :, :, :c]),
+                beyond(x[:, :, :, c + 1:]),
+                beyond(x[:, :, :r]),
+                beyond(x[:, :, r + 1:]),
+            ]
+            for view, want in enumerate(expected):
+                torch.testing.assert_close(views[:, view, :, r, c], want)
+
+
+@pytest.mark.parametrize('shape', [(1, 6), (6, 1), (9, 14)])
+def test_axial_head_runs_on_any_map_and_learns_through_the_views(shape):
+    model = build_model('t-rnet-attn', ModelConfig(vocab_size=5, axial=True))
+    assert model.head.convs[1].in_channels == 8 * 7
+    values = model(torch.randint(0, 12, (2, *shape)), torch.tensor([[2, 3, 4], [2, 0, 0]]))
+    assert values.shape == (2, *shape)
+    values.sum().backward()
+    assert model.head.convs[1].weight.grad[:, 8:].abs().sum() > 0
 
 
 def test_isi_sizes():
