@@ -46,7 +46,7 @@ TARGETS = {
 
 
 def status_mb(field: str, pid: int | str = 'self') -> float:
-    """A memory line of /proc/<pid>/status (VmRSS: now, VmHWM: peak), in MB."""
+    """Return a memory line of /proc/<pid>/status (VmRSS: now, VmHWM: peak), in MB."""
     with open(f'/proc/{pid}/status') as status:
         for line in status:
             if line.startswith(f'{field}:'):
@@ -276,7 +276,7 @@ def check_text(check: dict) -> str:
 
 
 def table(result: dict) -> str:
-    """The README's benchmark table (markdown) of a bench result, with its caption lines."""
+    """Return the README's benchmark table of a result in markdown, with its caption lines."""
     checks_ = result['checks']
     lines = [
         '| map | output network alone: plain / as run | Grounder.ground, cached instruction '
@@ -308,7 +308,9 @@ def table(result: dict) -> str:
             )
     if '1024x1024' in by_map:
         check = checks_['peak_rss_1024x1024_mb']
-        lines.append(f'Peak RSS grounding 1024x1024: {check["measured"]:.0f} MB ({check_text(check)}).')
+        lines.append(
+            f'Peak RSS grounding 1024x1024: {check["measured"]:.0f} MB ({check_text(check)}).'
+        )
     throughput = result['throughput']
     lines.append(
         f'Throughput, one batch of {throughput["batch"]} maps of {throughput["map"]}: '
@@ -355,7 +357,9 @@ def cmd_bench(args) -> int:
 
 
 def register_cli(subparsers) -> None:
-    b = subparsers.add_parser('bench', help='fast vs reference latency per map size, throughput, ROS round trip, memory')
+    b = subparsers.add_parser(
+        'bench', help='fast vs reference latency per map size, throughput, ROS round trip, memory'
+    )
     b.add_argument('--out', default='results/bench.json')
     b.add_argument('--checkpoint', default=DEFAULT_CHECKPOINT)
     b.add_argument('--sizes', nargs='+', type=int, default=list(SIZES))

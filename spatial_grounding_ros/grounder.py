@@ -86,7 +86,7 @@ class Grounder:
 
     @torch.no_grad()
     def text_code(self, instruction: str) -> dict:
-        """The model's text code of an instruction, computed once while it stays in use."""
+        """Return the model's text code of an instruction, computed once while it is in use."""
         code = self.text_codes.pop(instruction, None)
         if code is None:
             code = self.model.text_code(torch.as_tensor(self.vocab.encode_batch([instruction])))

@@ -146,12 +146,12 @@ def shifted(padded: torch.Tensor, radius: int) -> list[torch.Tensor]:
 
 
 def present_kinds(grids: torch.Tensor, n_entities: int) -> torch.Tensor:
-    """The entity kinds that occur in `grids`, ascending (a count, not a sort: cheap on large maps)."""
+    """Return the entity kinds in `grids`, ascending (a count, not a sort: cheap on big maps)."""
     return torch.bincount(grids.flatten(), minlength=n_entities).nonzero().flatten()
 
 
 def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool):
-    """A model's return: the value map, and with return_aux the relation map and attention."""
+    """Return a model's output: the value map, and with return_aux Z1 and the attention."""
     return (values, {'relation_map': z1, 'attention': attention}) if return_aux else values
 
 
@@ -351,7 +351,7 @@ class TRNet(nn.Module):
         return self.ground(grids, self.text_code(tokens, kinds), return_aux)
 
     def pair_forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
-        """The reference: every cell against each of its 8 neighbours."""
+        """Score every cell against each of its 8 neighbours: the reference."""
         b, h, w = grids.shape
         radius = self.cfg.radius
         phi = self.phi(grids)  # (B, H+2, W+2, k)
@@ -452,7 +452,8 @@ class TCNN(nn.Module):
     def text_code(self, tokens: torch.Tensor) -> dict:
         """All that an instruction contributes: the kernel (B, k, 3, 3) and beta (B, 3)."""
         vec = self.decoder(self.text(tokens)[2])
-        return {'kernels': vec[:, :-3].unflatten(1, (self.cfg.embed_dim, 3, 3)), 'beta': vec[:, -3:]}
+        kernels = vec[:, :-3].unflatten(1, (self.cfg.embed_dim, 3, 3))
+        return {'kernels': kernels, 'beta': vec[:, -3:]}
 
     def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""

@@ -34,7 +34,7 @@ INSTRUCTIONS = [
 
 
 def random_model(name: str, vocab_size: int, seed: int, **config) -> torch.nn.Module:
-    """A seeded model whose attention differs by pair and word (built, it is uniform)."""
+    """Build a seeded model whose attention differs by pair and word (built, it is uniform)."""
     torch.manual_seed(seed)
     model = build_model(name, ModelConfig(vocab_size=vocab_size, **config)).eval()
     if name == 't-rnet-attn':
