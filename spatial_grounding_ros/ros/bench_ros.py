@@ -31,11 +31,19 @@ from . import convert
 from .demo import executable
 from .grounder_node import LATCHED
 from .node_support import stop_processes
-from ..bench import status_mb
 
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
 # run, that share a ROS_DOMAIN_ID never answer each other's requests
 NAMESPACE = f'/bench_{os.getpid()}'
+
+
+def process_rss_mb(pid: int | str = 'self') -> float:
+    """Resident set size of a process now (Linux /proc), in MB."""
+    with open(f'/proc/{pid}/status') as status:
+        for line in status:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) / 1024
+    raise RuntimeError(f'no VmRSS for process {pid}')
 
 
 class LatencyClient(Node):
@@ -113,13 +121,13 @@ def round_trip_latency(
         client.request(instructions[0], timeout=30)  # the first one also waits for the map
         for i in range(warmup):
             client.request(instructions[i % len(instructions)], timeout=10)
-        rss_after_warmup = status_mb('VmRSS', node_process.pid)
+        rss_after_warmup = process_rss_mb(node_process.pid)
         latencies = []
         for i in range(requests):
             latencies.append(client.request(instructions[i % len(instructions)], timeout=10))
             if progress is not None:
                 progress.update(1)
-        rss_end = status_mb('VmRSS', node_process.pid)
+        rss_end = process_rss_mb(node_process.pid)
     finally:
         executor.shutdown()
         spinner.join(timeout=5)
