@@ -7,11 +7,15 @@
 """
 `spatial-grounding bench`: how fast and how lean the grounder is.
 
-- forward latency of the model (one map, one instruction, no_grad) for growing map sizes;
+- per map size (10 to 1024): the output network alone, Grounder.ground with a cached and with
+  a new instruction, the model's fast forward and its pair-by-pair reference (where one call
+  fits --reference-max-call), in the same run, so their ratios hold across machines; and the
+  peak RSS of grounding at that size;
 - throughput of one batched forward over 512 maps of 10x10;
 - end-to-end ROS latency, instruction published -> goal_pose received (ros/bench_ros.py);
 - memory: this process's RSS after 100 and after 10,000 Grounder.ground() requests.
-Results go to one JSON file with the machine's description; targets are checked in it.
+Results go to one JSON file with the machine's description and which targets were met, and its
+table to a markdown file beside it (the README's benchmark table).
 """
 
 from __future__ import annotations
@@ -20,7 +24,6 @@ import json
 import os
 from pathlib import Path
 import platform
-import resource
 import time
 
 import numpy as np
@@ -30,26 +33,41 @@ from tqdm import tqdm
 from .generator import generate, global_goals, local_goals, random_grid
 from .grounder import DEFAULT_CHECKPOINT, Grounder
 
-SIZES = (10, 32, 64, 128, 256)
+SIZES = (10, 32, 64, 128, 256, 512, 1024)
+# issue 11's minimum: Grounder.ground (cached instruction) against the output network alone
 TARGETS = {
-    'forward_10x10_p50_ms': 2.0,
-    'forward_128x128_p50_ms': 100.0,
-    'ros_end_to_end_p99_ms': 20.0,
+    'ground_over_head_10x10': 5.0,
+    'ground_over_head_128x128': 1.6,
+    'ground_over_head_512x512': 1.6,
+    'peak_rss_1024x1024_mb': 2048.0,
+    'ros_end_to_end_p99_ms': 5.0,
     'rss_growth_mb': 20.0,
 }
 
 
-def rss_mb() -> float:
-    """Return this process's resident set size now (Linux /proc), in MB."""
-    with open('/proc/self/status') as status:
+def status_mb(field: str, pid: int | str = 'self') -> float:
+    """Return a memory line of /proc/<pid>/status (VmRSS: now, VmHWM: peak), in MB."""
+    with open(f'/proc/{pid}/status') as status:
         for line in status:
-            if line.startswith('VmRSS:'):
+            if line.startswith(f'{field}:'):
                 return int(line.split()[1]) / 1024
-    raise RuntimeError('no VmRSS in /proc/self/status')
+    raise RuntimeError(f'no {field} in /proc/{pid}/status')
+
+
+def rss_mb() -> float:
+    """Return this process's resident set size now, in MB."""
+    return status_mb('VmRSS')
+
+
+def reset_peak_rss() -> None:
+    """Start the peak RSS (VmHWM) again from the RSS now (Linux: clear_refs 5)."""
+    with open('/proc/self/clear_refs', 'w') as clear_refs:
+        clear_refs.write('5')
 
 
 def peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    """Return this process's peak RSS since the last reset_peak_rss(), in MB."""
+    return status_mb('VmHWM')
 
 
 def machine() -> dict:
@@ -98,27 +116,67 @@ def percentiles(seconds: list[float]) -> dict:
     }
 
 
+def timed(call, budget_s: float, max_reps: int, desc: str) -> dict:
+    """Percentiles of `call` over as many runs as fit `budget_s` (3 to max_reps)."""
+    call()  # warm-up: the first call pays set-up costs
+    start = time.perf_counter()
+    call()  # the time of one call sets the count
+    reps = int(min(max_reps, max(3, budget_s / (time.perf_counter() - start))))
+    times = []
+    for _ in tqdm(range(reps), desc=desc, leave=False):
+        t0 = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - t0)
+    return percentiles(times)
+
+
 @torch.no_grad()
-def forward_latency(grounder: Grounder, size: int, budget_s: float, max_reps: int) -> dict:
-    """Model forward (with the relation map and attention, as the node asks) on one map."""
+def size_latency(grounder: Grounder, size: int, args, reference_s_per_cell: float) -> dict:
+    """
+    Time every way of grounding one `size` x `size` map, and the output network alone.
+
+    The reference runs when one call, predicted from the last size's seconds per cell
+    (0: run it), fits args.reference_max_call.
+    """
     grid, text = world_of_size(size)
     grids = torch.as_tensor(grid)[None]
     tokens = torch.as_tensor(grounder.vocab.encode_batch([text]))
-    grounder.model(grids, tokens, return_aux=True)  # warm-up: the first call pays set-up costs
-    start = time.perf_counter()
-    grounder.model(grids, tokens, return_aux=True)  # the time of one call sets the count
-    reps = int(min(max_reps, max(3, budget_s / (time.perf_counter() - start))))
-    times = []
-    for _ in tqdm(range(reps), desc=f'forward {size}x{size}', leave=False):
-        t0 = time.perf_counter()
-        grounder.model(grids, tokens, return_aux=True)
-        times.append(time.perf_counter() - t0)
-    return {
-        'map': f'{size}x{size}',
-        'instruction': text,
-        **percentiles(times),
-        'peak_rss_mb_so_far': peak_rss_mb(),
-    }
+    model = grounder.model
+    z1 = torch.randn(1, size, size)
+    beta = torch.randn(1, 3)
+    x = torch.stack([z1, z1], 1)
+
+    def new_instruction():
+        grounder.text_codes.clear()
+        grounder.ground(grid, text)
+
+    def run(call, what):
+        return timed(call, args.budget, 300, f'{what} {size}x{size}')
+
+    row = {'map': f'{size}x{size}', 'instruction': text}
+    # the output network alone: as the model runs it (channels-last, tiled), and plain
+    row['head'] = run(lambda: model.head(z1, beta), 'head')
+    row['head_plain'] = run(lambda: model.head.convolve(x, torch.contiguous_format), 'plain head')
+    reset_peak_rss()
+    row['ground_cached'] = run(lambda: grounder.ground(grid, text), 'ground, cached')
+    row['peak_rss_mb'] = peak_rss_mb()
+    row['ground_new'] = run(new_instruction, 'ground, new instruction')
+    row['forward'] = run(lambda: model(grids, tokens, return_aux=True), 'forward')
+    row['ground_over_head'] = row['ground_cached']['p50_ms'] / row['head']['p50_ms']
+    if hasattr(model, 'pair_forward'):
+        if reference_s_per_cell * size * size <= args.reference_max_call:
+            reset_peak_rss()
+            row['reference'] = run(
+                lambda: model(grids, tokens, return_aux=True, reference=True), 'reference'
+            )
+            row['reference_peak_rss_mb'] = peak_rss_mb()
+            row['reference_over_forward'] = row['reference']['p50_ms'] / row['forward']['p50_ms']
+            row['reference_over_ground'] = (
+                row['reference']['p50_ms'] / row['ground_cached']['p50_ms']
+            )
+        else:
+            row['reference'] = None  # predicted over the budget: not run
+    return row
 
 
 @torch.no_grad()
@@ -173,11 +231,14 @@ def run(args) -> dict:
             k: grounder.loaded.header.get(k) for k in ('task', 'best_epoch', 'val_metrics')
         },
         'targets': TARGETS,
+        'sizes': [],
     }
-    result['forward'] = [
-        forward_latency(grounder, size, args.budget, max_reps=300)
-        for size in tqdm(args.sizes, desc='forward latency')
-    ]
+    reference_s_per_cell = 0.0
+    for size in tqdm(args.sizes, desc='map sizes'):
+        row = size_latency(grounder, size, args, reference_s_per_cell)
+        if row.get('reference'):
+            reference_s_per_cell = row['reference']['p50_ms'] / 1e3 / size**2
+        result['sizes'].append(row)
     result['throughput'] = batch_throughput(grounder, args.batch, args.batch_reps)
     if not args.skip_ros:
         from .ros.bench_ros import round_trip_latency
@@ -194,10 +255,12 @@ def run(args) -> dict:
 
 
 def checks(result: dict) -> dict:
-    by_map = {f['map']: f for f in result['forward']}
+    by_map = {row['map']: row for row in result['sizes']}
     measured = {
-        'forward_10x10_p50_ms': by_map.get('10x10', {}).get('p50_ms'),
-        'forward_128x128_p50_ms': by_map.get('128x128', {}).get('p50_ms'),
+        'ground_over_head_10x10': by_map.get('10x10', {}).get('ground_over_head'),
+        'ground_over_head_128x128': by_map.get('128x128', {}).get('ground_over_head'),
+        'ground_over_head_512x512': by_map.get('512x512', {}).get('ground_over_head'),
+        'peak_rss_1024x1024_mb': by_map.get('1024x1024', {}).get('peak_rss_mb'),
         'ros_end_to_end_p99_ms': result.get('ros_end_to_end', {}).get('p99_ms'),
         'rss_growth_mb': result['memory']['rss_growth_mb'],
     }
@@ -207,29 +270,111 @@ def checks(result: dict) -> dict:
     }
 
 
+def check_text(check: dict) -> str:
+    state = {True: 'met', False: 'MISSED', None: 'not measured'}[check['met']]
+    return f'target <= {check["target"]:g}: {state}'
+
+
+def table(result: dict) -> str:
+    """Return the README's benchmark table of a result in markdown, with its caption lines."""
+    checks_ = result['checks']
+    lines = [
+        '| map | output network alone: plain / as run | Grounder.ground, cached instruction '
+        '| ground / network | new instruction | model forward | reference forward '
+        '| reference / forward | peak RSS |',
+        '| --- | --- | --- | --- | --- | --- | --- | --- | --- |',
+    ]
+    for row in result['sizes']:
+        reference = row.get('reference')
+        lines.append(
+            f'| {row["map"]} | {row["head_plain"]["p50_ms"]:.3g} / '
+            f'{row["head"]["p50_ms"]:.3g} ms | {row["ground_cached"]["p50_ms"]:.3g} ms '
+            f'| {row["ground_over_head"]:.2f} | {row["ground_new"]["p50_ms"]:.3g} ms '
+            f'| {row["forward"]["p50_ms"]:.3g} ms '
+            + (
+                f'| {reference["p50_ms"]:.3g} ms | {row["reference_over_forward"]:.1f}x '
+                if reference
+                else '| not run | '
+            )
+            + f'| {row["peak_rss_mb"]:.0f} MB |'
+        )
+    by_map = {row['map']: row for row in result['sizes']}
+    for size in ('10x10', '128x128', '512x512'):
+        if size in by_map:
+            check = checks_[f'ground_over_head_{size}']
+            lines.append(
+                f'Grounder.ground / output network alone at {size}: '
+                f'{check["measured"]:.2f} ({check_text(check)}).'
+            )
+    if '1024x1024' in by_map:
+        check = checks_['peak_rss_1024x1024_mb']
+        lines.append(
+            f'Peak RSS grounding 1024x1024: {check["measured"]:.0f} MB ({check_text(check)}).'
+        )
+    throughput = result['throughput']
+    lines.append(
+        f'Throughput, one batch of {throughput["batch"]} maps of {throughput["map"]}: '
+        f'{throughput["maps_per_second"]:.0f} maps/s ({throughput["median_batch_ms"]:.0f} ms '
+        'per batch).'
+    )
+    ros = result.get('ros_end_to_end')
+    if ros:
+        lines.append(
+            f'ROS end to end, instruction published -> goal_pose received, {ros["map"]}: '
+            f'p50 {ros["p50_ms"]:.2f} ms, p99 {ros["p99_ms"]:.2f} ms, max {ros["max_ms"]:.2f} ms '
+            f'({ros["requests"]} requests; {check_text(checks_["ros_end_to_end_p99_ms"])}); '
+            f'grounder node RSS {ros["node_rss_mb_after_warmup"]:.0f} -> '
+            f'{ros["node_rss_mb_end"]:.0f} MB.'
+        )
+    memory = result['memory']
+    early, total = sorted(int(k.split('_')[-1]) for k in memory if k.startswith('rss_mb_after_'))
+    lines.append(
+        f'Bench process RSS after {early} vs {total:,} Grounder.ground() calls: '
+        f'{memory[f"rss_mb_after_{early}"]:.1f} -> {memory[f"rss_mb_after_{total}"]:.1f} MB '
+        f'({check_text(checks_["rss_growth_mb"])}).'
+    )
+    machine_ = result['machine']
+    lines.append(
+        f'Machine: {machine_["usable_cores"]} {machine_["cpu"]} cores, '
+        f'{machine_["torch_threads"]} torch thread, torch {machine_["torch"]}; load average '
+        f'{machine_["load_average_at_start"][0]:.1f} at the start.'
+    )
+    return '\n'.join(lines) + '\n'
+
+
 def cmd_bench(args) -> int:
     result = run(args)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=2) + '\n')
+    out.with_suffix('.md').write_text(table(result))
     for name, check in result['checks'].items():
         measured = 'not measured' if check['measured'] is None else f'{check["measured"]:.2f}'
         state = {True: 'met', False: 'MISSED', None: '-'}[check['met']]
         print(f'{name}: {measured} (target <= {check["target"]}) {state}')
-    print(f'wrote {out}')
+    print(f'wrote {out} and {out.with_suffix(".md")}')
     return 0
 
 
 def register_cli(subparsers) -> None:
-    b = subparsers.add_parser('bench', help='latency, throughput, ROS round trip and memory')
+    b = subparsers.add_parser(
+        'bench', help='fast vs reference latency per map size, throughput, ROS round trip, memory'
+    )
     b.add_argument('--out', default='results/bench.json')
     b.add_argument('--checkpoint', default=DEFAULT_CHECKPOINT)
     b.add_argument('--sizes', nargs='+', type=int, default=list(SIZES))
     b.add_argument(
         '--budget',
         type=float,
-        default=10.0,
-        help='seconds of forward passes per map size (at least 3, at most 300)',
+        default=5.0,
+        help='seconds of calls per way of grounding and map size (at least 3, at most 300)',
+    )
+    b.add_argument(
+        '--reference-max-call',
+        type=float,
+        default=5.0,
+        help='seconds one reference (pair-by-pair) forward may take, predicted from the '
+        'previous size; larger sizes skip it',
     )
     b.add_argument('--batch', type=int, default=512, help='maps of 10x10 in the batched forward')
     b.add_argument('--batch-reps', type=int, default=5)

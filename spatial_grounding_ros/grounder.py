@@ -18,6 +18,7 @@ The ROS grounder node is a thin adapter over this class.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,10 +44,17 @@ class Grounding:
 
 
 class Grounder:
-    def __init__(self, loaded: Loaded):
-        self.loaded = loaded
+    def __init__(self, loaded: Loaded, cached_instructions: int = 64):
+        """
+        Wrap a loaded checkpoint.
+
+        The text codes of the last `cached_instructions` instructions are kept (t-RNetAttn: the
+        relation table over all kinds), since a node grounds the same instruction on new maps.
+        """
+        self.loaded, self.cached_instructions = loaded, cached_instructions
         self.model, self.vocab, self.entities = loaded.model, loaded.vocab, loaded.entities
         self.model.eval()
+        self.text_codes: OrderedDict[str, dict] = OrderedDict()  # least recently used first
 
     @classmethod
     def from_checkpoint(cls, checkpoint: str = DEFAULT_CHECKPOINT) -> 'Grounder':
@@ -77,11 +85,21 @@ class Grounder:
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
+    def text_code(self, instruction: str) -> dict:
+        """Return the model's text code of an instruction, computed once while it is in use."""
+        code = self.text_codes.pop(instruction, None)
+        if code is None:
+            code = self.model.text_code(torch.as_tensor(self.vocab.encode_batch([instruction])))
+            if len(self.text_codes) >= self.cached_instructions:
+                self.text_codes.popitem(last=False)
+        self.text_codes[instruction] = code
+        return code
+
+    @torch.no_grad()
     def ground(self, grid: np.ndarray, instruction: str) -> Grounding:
         self.check(grid, instruction)
         grids = torch.as_tensor(np.asarray(grid, dtype=np.int64))[None]
-        tokens = torch.as_tensor(self.vocab.encode_batch([instruction]))
-        values, aux = self.model(grids, tokens, return_aux=True)
+        values, aux = self.model.ground(grids, self.text_code(instruction), return_aux=True)
         values = values[0].numpy()
         row, col = np.unravel_index(int(values.argmax()), values.shape)
         words = tokenize(instruction)

@@ -122,31 +122,38 @@ class EntityEncoder(nn.Module):
         self.off_map, self.pad = cfg.n_entities, pad
         self.embed = nn.Embedding(cfg.n_entities + 1, cfg.embed_dim)
 
+    def pad_grid(self, grids: torch.Tensor) -> torch.Tensor:
+        """(B,H,W) -> (B,H+2p,W+2p) entity indices, the border off the map."""
+        p = self.pad
+        return F.pad(grids, (p, p, p, p), value=self.off_map)
+
     def forward(self, grids: torch.Tensor) -> torch.Tensor:
         """(B,H,W) -> (B,H+2p,W+2p,k) embeddings of the border-padded grid."""
-        p = self.pad
-        return self.embed(F.pad(grids, (p, p, p, p), value=self.off_map))
+        return self.embed(self.pad_grid(grids))
 
 
-def neighbour_index(
-    height: int, width: int, radius: int = 1, device=None
-) -> tuple[torch.Tensor, torch.Tensor]:
+def shifted(padded: torch.Tensor, radius: int) -> list[torch.Tensor]:
     """
-    Flat indices into the grid padded by `radius`.
+    Each cell's neighbour at every offset, in neighbour_offsets order.
 
-    Each cell (H*W,) and its neighbours (H*W, n).
+    (B, H+2r, W+2r, ...) padded by `radius` -> one (B, H, W, ...) view per offset: the work is
+    per offset, never per cell.
     """
-    padded_w = width + 2 * radius
-    rows, cols = torch.meshgrid(
-        torch.arange(radius, height + radius, device=device),
-        torch.arange(radius, width + radius, device=device),
-        indexing='ij',
-    )
-    centre = (rows * padded_w + cols).reshape(-1)
-    offsets = torch.tensor(
-        [dr * padded_w + dc for dr, dc in neighbour_offsets(radius)], device=device
-    )
-    return centre, centre[:, None] + offsets[None, :]
+    height, width = padded.shape[1] - 2 * radius, padded.shape[2] - 2 * radius
+    return [
+        padded[:, radius + dr:radius + dr + height, radius + dc:radius + dc + width]
+        for dr, dc in neighbour_offsets(radius)
+    ]
+
+
+def present_kinds(grids: torch.Tensor, n_entities: int) -> torch.Tensor:
+    """Return the entity kinds in `grids`, ascending (a count, not a sort: cheap on big maps)."""
+    return torch.bincount(grids.flatten(), minlength=n_entities).nonzero().flatten()
+
+
+def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool):
+    """Return a model's output: the value map, and with return_aux Z1 and the attention."""
+    return (values, {'relation_map': z1, 'attention': attention}) if return_aux else values
 
 
 def gradient_maps(height: int, width: int, device=None, cells: float = 0.0) -> torch.Tensor:
@@ -204,18 +211,48 @@ class OutputHead(nn.Module):
         # A leaky slope: with 3-channel layers, plain ReLUs sometimes all die early and the
         # map goes constant (PW global runs stuck at train MSE 1.5 while PW local learned).
         self.slope = slope
+        # maps of more than tile x tile cells run in tiles of that side (memory: see forward)
+        self.tile = 256
 
     def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
         b, h, w = z1.shape
         z2 = torch.einsum('bc,chw->bhw', beta, gradient_maps(h, w, z1.device, self.gradient_cells))
         x = torch.stack([z1, z2], dim=1)
+        if h * w <= self.tile * self.tile:
+            return self.convolve(x)
+        # Large maps go through in tiles, so the 8..32-channel activations exist for one tile
+        # at a time. Each 3x3 convolution reaches one cell further, so a tile read with a halo
+        # of len(convs) cells has exact values everywhere inside it: the zero padding at the
+        # halo's cut edges only reaches into the halo. At the map's own edges the tile is cut
+        # where the map ends, so the padding there is the untiled padding.
+        halo, t = len(self.convs), self.tile
+        values = z1.new_empty(b, h, w)
+        for top in range(0, h, t):
+            for left in range(0, w, t):
+                bottom, right = min(top + t, h), min(left + t, w)
+                r0, c0 = max(top - halo, 0), max(left - halo, 0)
+                tile = self.convolve(x[:, :, r0:min(bottom + halo, h), c0:min(right + halo, w)])
+                values[:, top:bottom, left:right] = tile[
+                    :, top - r0:bottom - r0, left - c0:right - c0
+                ]
+        return values
+
+    def convolve(self, x: torch.Tensor, layout=None) -> torch.Tensor:
+        """(B, 2, H, W) -> (B, H, W) through the convolutions."""
+        if layout is None:
+            # channels-last is oneDNN's fast layout on CPU for batches and large maps (one
+            # thread: 2.3x on a 512x512 map, 1.6x on a training batch of 24x24 maps); one map
+            # of up to 96x96 runs faster in the plain layout. The bench times both.
+            big = x.shape[0] > 1 or x.shape[2] * x.shape[3] > 96 * 96
+            layout = torch.channels_last if big else torch.contiguous_format
+        x = x.contiguous(memory_format=layout)
         for n, conv in enumerate(self.convs):
             if n == 1 and self.axial:
                 x = torch.cat([x, axial_views(x)], 1)
             x = conv(x)
             if n < len(self.convs) - 1:
-                x = F.leaky_relu(x, self.slope)
-        return x.squeeze(1)
+                x = F.leaky_relu(x, self.slope, inplace=True)  # the conv's own output
+        return x[:, 0]
 
 
 AXIAL_VIEWS = 6
@@ -264,6 +301,12 @@ class TRNet(nn.Module):
     With attention (t-RNetAttn) the relation MLP's weights are decoded from h_ij = sum_k
     alpha_ij(k) h(k) for each cell pair; without it (t-RNet) from the mean of the LSTM outputs, the
     same for every pair.
+
+    Two ways to the same numbers. The reference (pair_forward) scores every cell pair of the map.
+    The fast way uses that a pair's score, attention included, depends only on the two cells'
+    kinds, their offset and the instruction: text_code scores each (kind_i, kind_j, offset) once
+    per instruction, a table whatever the map size, and ground reads each pair's score from it.
+    forward takes whichever scores fewer rows; both give the same values and gradients.
     """
 
     def __init__(self, cfg: ModelConfig, attention: bool = True):
@@ -312,45 +355,132 @@ class TRNet(nn.Module):
                 x = torch.tanh(x)
         return x.squeeze(-1)
 
-    def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
-        b, h, w = grids.shape
-        k = self.cfg.embed_dim
-        centre, nbrs = neighbour_index(h, w, self.cfg.radius, grids.device)
-        n_nbrs = nbrs.shape[1]  # 8 at radius 1
-        phi = self.phi(grids).flatten(1, 2)  # (B, (H+2)(W+2), k)
-        phi_i = phi[:, centre]  # (B, N, k)
-        phi_j = phi[:, nbrs]  # (B, N, 8, k)
-        words, mask, mean = self.text(tokens)  # (B, L, 30), (B, L), (B, 30)
-        word_params = self.decoder(words)  # (B, L, 263)
+    def relations(self, phi_i: torch.Tensor, phi_j: torch.Tensor, text: tuple):
+        """
+        Score pairs: centres phi_i (B, M, k) against phi_j (B, M, 8, k) at the 8 offsets.
+
+        Returns r (B, M, 8) and the attention over words (B, M, 8, L) (None without it). The
+        M rows are a map's cells (reference) or a table's kind pairs (fast): the same code.
+        """
+        words, mask, mean = text  # (B, L, 30), (B, L), (B, 30)
+        b, m, n_nbrs, k = phi_j.shape
         attention = None
         if self.attention_on:
             # alpha_ij(k) ~ exp(h(k)^T A [phi_i; phi_j]); the score splits into an i part and
-            # a j part, so it costs (B, N, L) + (B, N, 8, L), not a product over all three.
+            # a j part, so it costs (B, M, L) + (B, M, 8, L), not a product over all three.
             q = self.attn(words)  # (B, L, 2k)
             score = torch.einsum('bnd,bld->bnl', phi_i, q[..., :k]).unsqueeze(2) + torch.einsum(
                 'bnpd,bld->bnpl', phi_j, q[..., k:]
             )
             score = score.masked_fill(~mask[:, None, None, :], float('-inf'))
-            attention = score.softmax(-1)  # (B, N, 8, L)
+            attention = score.softmax(-1)  # (B, M, 8, L)
             # the decoder is linear and sum_k alpha = 1, so decoding h_ij equals the
             # alpha-weighted sum of the words' decoded parameters
-            weights = self.split_params(word_params)  # (B, L, out, in) per layer
+            weights = self.split_params(self.decoder(words))  # (B, L, out, in) per layer
         else:
             weights = self.split_params(self.decoder(mean))  # (B, out, in) per layer
-        rel = (
-            relative_positions(self.cfg.radius).to(grids.device).expand(b, h * w, -1).unsqueeze(-1)
-        )
+        rel = relative_positions(self.cfg.radius).to(phi_j.device).expand(b, m, -1).unsqueeze(-1)
         x = torch.cat([phi_i.unsqueeze(2).expand(-1, -1, n_nbrs, -1), phi_j, rel], -1)
-        r = self.relation_mlp(weights, x, attention)  # (B, N, 8)
+        return self.relation_mlp(weights, x, attention), attention
+
+    def forward(
+        self,
+        grids: torch.Tensor,
+        tokens: torch.Tensor,
+        return_aux: bool = False,
+        reference: bool = False,
+    ):
+        """
+        Value maps (B, H, W) for grids (B, H, W) and tokens (B, L).
+
+        reference=True scores every cell pair of the maps (the definition); otherwise the
+        relation table over the kinds present is used when it has fewer rows than the maps
+        have cells (a table row is a (kind_i, kind_j) pair, a map row a cell; both have 8
+        offsets): a 10x10 batch with all 12 kinds has 12 x 13 = 156 rows against 100 cells.
+        """
+        kinds = present_kinds(grids, self.cfg.n_entities)
+        if reference or len(kinds) * (len(kinds) + 1) >= grids.shape[1] * grids.shape[2]:
+            return self.pair_forward(grids, tokens, return_aux)
+        return self.ground(grids, self.text_code(tokens, kinds), return_aux)
+
+    def pair_forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
+        """Score every cell against each of its 8 neighbours: the reference."""
+        b, h, w = grids.shape
+        radius = self.cfg.radius
+        phi = self.phi(grids)  # (B, H+2, W+2, k)
+        phi_i = phi[:, radius:radius + h, radius:radius + w].flatten(1, 2)  # (B, N, k)
+        phi_j = torch.stack(shifted(phi, radius), dim=3).flatten(1, 2)  # (B, N, 8, k)
+        text = self.text(tokens)
+        r, attention = self.relations(phi_i, phi_j, text)  # (B, N, 8)
         z1 = r.max(dim=-1).values.view(b, h, w)
-        beta = self.decoder(mean)[:, -3:]  # the last 3 entries of h
-        values = self.head(z1, beta)
-        if not return_aux:
-            return values
+        values = self.head(z1, self.decoder(text[2])[:, -3:])  # beta: the last 3 entries of h
+        # how much each word mattered, averaged over all pairs
+        word_attention = None if attention is None else attention.mean(dim=(1, 2))
+        return outputs(values, z1, word_attention, return_aux)
+
+    def text_code(self, tokens: torch.Tensor, kinds: torch.Tensor | None = None) -> dict:
+        """
+        All that an instruction contributes, for maps of any size.
+
+        The relation table r over (kind_i, kind_j, offset) as (B, Ki * Kj, 8), row
+        i * Kj + j; the attention over words per kind pair (B, Ki * Kj, L), the same at every
+        offset (its score has no offset term), or None; and beta (B, 3). The centre kinds are
+        `kinds` (default: all), the neighbour kinds those and the off-map one: a caller that
+        keeps this per instruction grounds it on any map with a gather and a max.
+        """
+        if kinds is None:
+            kinds = torch.arange(self.cfg.n_entities, device=tokens.device)
+        kinds_j = torch.cat([kinds, kinds.new_tensor([self.phi.off_map])])
+        b, n_nbrs = tokens.shape[0], len(neighbour_offsets(self.cfg.radius))
+        embed = self.phi.embed.weight
+        phi_i = embed[kinds].repeat_interleave(len(kinds_j), dim=0)  # (Ki * Kj, k)
+        phi_j = embed[kinds_j].repeat(len(kinds), 1)
+        text = self.text(tokens)
+        r, attention = self.relations(
+            phi_i.expand(b, -1, -1), phi_j[None, :, None].expand(b, -1, n_nbrs, -1), text
+        )
+        return {
+            'kinds': kinds,
+            'relations': r,
+            'attention': None if attention is None else attention[:, :, 0],
+            'beta': self.decoder(text[2])[:, -3:],
+        }
+
+    def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
+        """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
+        b, h, w = grids.shape
+        kinds = code['kinds']
+        relations = code['relations'].expand(b, -1, -1)  # (B, Ki * Kj, 8)
+        # each entity kind's table row as a centre (i * Kj) and as a neighbour (j); -1: absent
+        n_kinds_j = len(kinds) + 1
+        row_i = torch.full((self.cfg.n_entities + 1,), -1, device=grids.device)
+        row_i[kinds] = torch.arange(len(kinds), device=grids.device)
+        row_j = row_i.clone()
+        row_j[self.phi.off_map] = len(kinds)
+        centre = row_i[grids].flatten(1)  # (B, N)
+        if centre.min() < 0:
+            missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
+            raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
+        centre *= n_kinds_j
+        # one gather per offset, from that offset's column of the table
+        rows = [
+            centre + nbr.flatten(1)
+            for nbr in shifted(row_j[self.phi.pad_grid(grids)], self.cfg.radius)
+        ]  # per offset (B, N): the (kind_i, kind_j) row of each pair
+        r = torch.stack([relations[:, :, p].gather(1, row) for p, row in enumerate(rows)], -1)
+        z1 = r.max(dim=-1).values.view(b, h, w)
+        values = self.head(z1, code['beta'].expand(b, -1))
         word_attention = None
-        if attention is not None:  # how much each word mattered, averaged over all pairs
-            word_attention = attention.mean(dim=(1, 2))
-        return values, {'relation_map': z1, 'attention': word_attention}
+        if return_aux and code['attention'] is not None:
+            # the mean over the map's pairs: each kind pair's attention times its pair count
+            counts = torch.zeros(b, relations.shape[1], device=grids.device)
+            ones = torch.ones(1, device=grids.device).expand_as(centre)
+            for row in rows:
+                counts.scatter_add_(1, row, ones)
+            word_attention = torch.einsum(
+                'bm,bml->bl', counts / (len(rows) * h * w), code['attention'].expand(b, -1, -1)
+            )
+        return outputs(values, z1, word_attention, return_aux)
 
 
 class TCNN(nn.Module):
@@ -370,16 +500,24 @@ class TCNN(nn.Module):
         self.head = OutputHead(cfg.head, cfg.head_slope, cfg.gradient_cells, cfg.axial)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
+        return self.ground(grids, self.text_code(tokens), return_aux)
+
+    def text_code(self, tokens: torch.Tensor) -> dict:
+        """All that an instruction contributes: the kernel (B, k, 3, 3) and beta (B, 3)."""
+        vec = self.decoder(self.text(tokens)[2])
+        kernels = vec[:, :-3].unflatten(1, (self.cfg.embed_dim, 3, 3))
+        return {'kernels': kernels, 'beta': vec[:, -3:]}
+
+    def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
+        """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
         b, h, w = grids.shape
         k = self.cfg.embed_dim
         phi = self.phi(grids).permute(0, 3, 1, 2)  # (B, k, H+2, W+2)
-        _, _, mean = self.text(tokens)
-        vec = self.decoder(mean)
-        kernels = vec[:, :-3].view(b, k, 3, 3)
+        kernels = code['kernels'].expand(b, -1, -1, -1).reshape(b, k, 3, 3)
         # one kernel per example: a grouped convolution over the batch
         z1 = F.conv2d(phi.reshape(1, b * k, h + 2, w + 2), kernels, groups=b).view(b, h, w)
-        values = self.head(z1, vec[:, -3:])
-        return (values, {'relation_map': z1, 'attention': None}) if return_aux else values
+        values = self.head(z1, code['beta'].expand(b, -1))
+        return outputs(values, z1, None, return_aux)
 
 
 class TUVFA(nn.Module):
@@ -409,13 +547,19 @@ class TUVFA(nn.Module):
         )
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
+        return self.ground(grids, self.text_code(tokens), return_aux)
+
+    def text_code(self, tokens: torch.Tensor) -> dict:
+        """All that an instruction contributes: the text vector (B, 7)."""
+        return {'text': self.to_text(self.text(tokens)[2])}
+
+    def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
+        """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
         b, h, w = grids.shape
         state = self.state(self.phi(grids).permute(0, 3, 1, 2))
-        _, _, mean = self.text(tokens)
-        text = self.to_text(mean)[:, :, None, None].expand(-1, -1, h, w)
+        text = code['text'].expand(b, -1)[:, :, None, None].expand(-1, -1, h, w)
         values = self.deconv(torch.cat([state, text], 1)).squeeze(1)
-        aux = {'relation_map': torch.zeros_like(values), 'attention': None}
-        return (values, aux) if return_aux else values
+        return outputs(values, torch.zeros_like(values), None, return_aux)
 
 
 MODELS = {

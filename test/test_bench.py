@@ -20,7 +20,7 @@ import torch
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from grounder_helpers import random_checkpoint  # noqa: E402, I100
-from spatial_grounding_ros import cli  # noqa: E402
+from spatial_grounding_ros import bench, cli  # noqa: E402
 
 
 def test_bench_writes_every_section(tmp_path):
@@ -58,18 +58,36 @@ def test_bench_writes_every_section(tmp_path):
     result = json.loads(out.read_text())
     assert result['machine']['cores'] == os.cpu_count()
     assert result['machine']['torch_threads'] == 1
-    assert [f['map'] for f in result['forward']] == ['10x10', '16x16']
-    assert all(0 < f['p50_ms'] <= f['p99_ms'] <= f['max_ms'] for f in result['forward'])
+    assert [row['map'] for row in result['sizes']] == ['10x10', '16x16']
+    for row in result['sizes']:
+        for way in ('head', 'head_plain', 'ground_cached', 'ground_new', 'forward', 'reference'):
+            assert 0 < row[way]['p50_ms'] <= row[way]['p99_ms'] <= row[way]['max_ms'], way
+        assert row['ground_over_head'] == row['ground_cached']['p50_ms'] / row['head']['p50_ms']
+        assert row['peak_rss_mb'] > 0 and row['reference_peak_rss_mb'] > 0
     assert result['throughput']['batch'] == 16 and result['throughput']['maps_per_second'] > 0
     ros = result['ros_end_to_end']
     assert ros['requests'] == 5 and 0 < ros['p50_ms'] <= ros['p99_ms']
     assert ros['node_rss_mb_end'] > 0
     memory = result['memory']
     assert memory['rss_mb_after_110'] > 0 and 'Grounder.ground()' in memory['measured']
-    assert set(result['checks']) == {
-        'forward_10x10_p50_ms',
-        'forward_128x128_p50_ms',
-        'ros_end_to_end_p99_ms',
-        'rss_growth_mb',
-    }
-    assert result['checks']['forward_128x128_p50_ms']['met'] is None  # not measured here
+    assert set(result['checks']) == set(bench.TARGETS)
+    assert result['checks']['ground_over_head_128x128']['met'] is None  # not measured here
+    # the markdown table beside the JSON is the JSON's table
+    assert out.with_suffix('.md').read_text() == bench.table(result)
+    assert '| 16x16 |' in bench.table(result)
+
+
+def test_bench_skips_a_reference_over_its_budget(tmp_path):
+    """The reference runs at the first size, then only while one call is predicted to fit."""
+    out = tmp_path / 'bench.json'
+    threads = torch.get_num_threads()
+    try:
+        arguments = ['bench', '--out', str(out), '--sizes', '10', '40', '--budget', '0.05']
+        arguments += ['--batch', '4', '--batch-reps', '1', '--skip-ros']
+        arguments += ['--memory-requests', '101', '--reference-max-call', '1e-6']
+        assert cli.main(arguments) == 0
+    finally:
+        torch.set_num_threads(threads)
+    first, second = json.loads(out.read_text())['sizes']
+    assert first['reference']['n'] >= 3 and second['reference'] is None
+    assert 'not run' in out.with_suffix('.md').read_text()

@@ -365,13 +365,16 @@ def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
 
 class FailingModel(torch.nn.Module):
     """
-    Return a model whose forward raises as torch does when memory runs out.
+    Return a model whose grounding raises as torch does when memory runs out.
 
-    A model whose forward raises as torch does when a map needs more memory than there
-    is (a real 256x256 request with a long instruction can; this one does it on demand).
+    A model whose grounding raises as torch does when a map needs more memory than there
+    is (a real request on a huge map can; this one does it on demand).
     """
 
-    def forward(self, grids, tokens, return_aux=False):
+    def text_code(self, tokens):
+        return {}
+
+    def ground(self, grids, code, return_aux=False):
         raise RuntimeError(
             'DefaultCPUAllocator: not enough memory: you tried to allocate 412316860416 bytes.'
         )

@@ -16,7 +16,7 @@ from pathlib import Path
 import re
 
 import pytest
-from spatial_grounding_ros import cli
+from spatial_grounding_ros import bench, cli
 from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
 
 REPO = Path(__file__).resolve().parents[1]
@@ -128,6 +128,7 @@ def readme_section(heading: str) -> str:
         ('Results: RL', 'rl.md'),
         ('Results: clear references', 'suite.md'),
         ('Results: clear references', 'ablation.md'),
+        ('Benchmarks', 'bench.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):
@@ -212,3 +213,10 @@ def test_suite_table_is_the_json():
         for cell, run in zip(row[2:], runs.values()):
             summary = run['sizes'][size] if family == '**all**' else run['families'][family][size]
             assert cell.split()[0].strip('*') == f'{summary["hit"]:.1%}', (family, size)
+
+
+def test_bench_table_is_the_json():
+    """results/bench.md is the table `spatial-grounding bench` makes of results/bench.json."""
+    result = json.loads((RESULTS / 'bench.json').read_text())
+    assert (RESULTS / 'bench.md').read_text() == bench.table(result)
+    assert [row['map'] for row in result['sizes']] == [f'{n}x{n}' for n in bench.SIZES]

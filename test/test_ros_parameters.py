@@ -97,7 +97,7 @@ def test_shipped_grounder_params_apply_under_a_namespace(ros_context, tmp_path):
             cli_args=['--ros-args', '--params-file', str(plain)],
         )
     )
-    assert control.get_parameter('max_cells').value == 65536
+    assert control.get_parameter('max_cells').value == 1048576
 
 
 def test_shipped_gridworld_params_apply_under_a_namespace(ros_context, tmp_path):

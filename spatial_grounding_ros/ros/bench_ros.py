@@ -146,5 +146,6 @@ def round_trip_latency(
         'node_rss_mb_end': rss_end,
         'measured': 'instruction published by a client node in the bench process -> '
         'goal_pose received by it; the grounder node in its own process '
-        f'(console script), one held map, {warmup} warm-up requests first',
+        f'(console script), one held map, {len(instructions)} instructions in turn, '
+        f'{warmup} warm-up requests first',
     }

@@ -1,0 +1,199 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The fast forward is the reference forward.
+
+t-RNetAttn and t-RNet read each pair's relation score from a table over (kind_i, kind_j,
+offset) per instruction (models.TRNet.text_code and ground); the reference scores every pair of
+the map (TRNet.pair_forward). Both must give the same value map, Z1 and attention, and the same
+gradients; the tiled output head must give the untiled one bit for bit.
+"""
+
+import numpy as np
+import pytest
+from spatial_grounding_ros import generator
+from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
+from spatial_grounding_ros.entities import ISI
+from spatial_grounding_ros.grounder import Grounder
+from spatial_grounding_ros.models import build_model, gradient_maps, ModelConfig, present_kinds
+from spatial_grounding_ros.text import Vocabulary
+import torch
+
+TOLERANCE = {'rtol': 1e-5, 'atol': 1e-5}
+# non-square, 1xN and Nx1, smaller and larger than the kind table (12 x 13 rows)
+SHAPES = [(1, 1), (1, 17), (17, 1), (3, 4), (10, 10), (13, 29), (40, 40)]
+INSTRUCTIONS = [
+    'reach cell two below the westernmost rock',
+    'go to the star',
+    'reach the cell between diamond and spade and then stop near the house please',
+]
+
+
+def random_model(name: str, vocab_size: int, seed: int, **config) -> torch.nn.Module:
+    """Build a seeded model whose attention differs by pair and word (built, it is uniform)."""
+    torch.manual_seed(seed)
+    model = build_model(name, ModelConfig(vocab_size=vocab_size, **config)).eval()
+    if name == 't-rnet-attn':
+        with torch.no_grad():
+            model.attn.weight.normal_()
+    return model
+
+
+def inputs(shape: tuple, n_entities: int, seed: int):
+    rng = np.random.default_rng(seed)
+    vocab = Vocabulary.build(INSTRUCTIONS)
+    grids = torch.as_tensor(rng.integers(0, n_entities, (len(INSTRUCTIONS), *shape)))
+    grids[0] = 0  # one map of a single kind
+    return vocab, grids, torch.as_tensor(vocab.encode_batch(INSTRUCTIONS))
+
+
+def assert_same(fast, reference):
+    (values, aux), (ref_values, ref_aux) = fast, reference
+    torch.testing.assert_close(values, ref_values, **TOLERANCE)
+    torch.testing.assert_close(aux['relation_map'], ref_aux['relation_map'], **TOLERANCE)
+    if ref_aux['attention'] is None:
+        assert aux['attention'] is None
+    else:
+        torch.testing.assert_close(aux['attention'], ref_aux['attention'], **TOLERANCE)
+
+
+@pytest.mark.parametrize('name', ['t-rnet-attn', 't-rnet'])
+@pytest.mark.parametrize('shape', SHAPES)
+def test_table_equals_pairs(name, shape):
+    """Tables over the kinds present, over all kinds, and forward's choice: all the reference."""
+    vocab, grids, tokens = inputs(shape, 12, seed=shape[0] * 100 + shape[1])
+    model = random_model(name, len(vocab), seed=len(shape))
+    with torch.no_grad():
+        reference = model(grids, tokens, return_aux=True, reference=True)
+        assert reference[1]['relation_map'].std() > 0.01 or shape == (1, 1)  # not degenerate
+        present = present_kinds(grids, 12)
+        assert_same(model.ground(grids, model.text_code(tokens, present), True), reference)
+        assert_same(model.ground(grids, model.text_code(tokens), True), reference)
+        assert_same(model(grids, tokens, return_aux=True), reference)
+        # one instruction's code serves a batch of maps
+        one = model.text_code(tokens[1:2])
+        assert_same(
+            model.ground(grids, one, True),
+            model(grids, tokens[1:2].expand(len(grids), -1), return_aux=True, reference=True),
+        )
+
+
+def test_table_equals_pairs_isi_and_radius_2():
+    """41 kinds with embedding 13 (ISI), and the footnote's 24 neighbours."""
+    for config, n_entities in (
+        ({'n_entities': len(ISI), 'embed_dim': ISI.embed_dim}, len(ISI)),
+        ({'radius': 2}, 12),
+    ):
+        vocab, grids, tokens = inputs((9, 14), n_entities, seed=3)
+        model = random_model('t-rnet-attn', len(vocab), seed=4, **config)
+        with torch.no_grad():
+            assert_same(
+                model.ground(grids, model.text_code(tokens), True),
+                model(grids, tokens, return_aux=True, reference=True),
+            )
+
+
+@pytest.mark.parametrize('name', ['t-rnet-attn', 't-rnet'])
+@pytest.mark.parametrize('size', [10, 24])
+def test_table_gradients_equal_pair_gradients(name, size):
+    """Training through the table moves every parameter as training through the pairs would."""
+    data = generator.generate(8, seed=size, mode='mixed', size=size)
+    vocab = Vocabulary.build(data.instructions)
+    grids = torch.as_tensor(data.grids)
+    tokens = torch.as_tensor(vocab.encode_batch(data.instructions))
+    target = torch.as_tensor(data.values)
+    model = random_model(name, len(vocab), seed=5).train()
+    gradients = []
+    for run in (
+        lambda: model(grids, tokens, reference=True),
+        lambda: model.ground(grids, model.text_code(tokens, present_kinds(grids, 12))),
+    ):
+        model.zero_grad()
+        ((run() - target) ** 2).mean().backward()
+        gradients.append({n: p.grad.clone() for n, p in model.named_parameters()})
+    reference, fast = gradients
+    for pname, grad in reference.items():
+        assert grad.abs().sum() > 0, pname
+        torch.testing.assert_close(fast[pname], grad, rtol=1e-4, atol=1e-6, msg=pname)
+
+
+def test_t_cnn_text_code_serves_any_map():
+    vocab, grids, tokens = inputs((6, 11), 12, seed=6)
+    model = random_model('t-cnn', len(vocab), seed=7)
+    with torch.no_grad():
+        expected = model(grids, tokens[2:3].expand(len(grids), -1), return_aux=True)
+        assert_same(model.ground(grids, model.text_code(tokens[2:3]), True), expected)
+
+
+def test_table_without_a_kind_of_the_grid_is_an_error():
+    vocab, grids, tokens = inputs((5, 5), 12, seed=8)
+    model = random_model('t-rnet-attn', len(vocab), seed=9)
+    grids[:, 0, 0] = 11
+    code = model.text_code(tokens, torch.arange(11))
+    with pytest.raises(ValueError, match=r'lacks entity kinds \[11\]'):
+        model.ground(grids, code)
+
+
+@pytest.mark.parametrize('shape', [(30, 45), (1, 40), (61, 13), (7, 7)])
+def test_tiled_head_is_the_untiled_head(shape):
+    """Tiles with a halo of one cell per 3x3 convolution: the same numbers, bit for bit."""
+    head = random_model('t-rnet-attn', 5, seed=10).head
+    z1, beta = torch.randn(2, *shape), torch.randn(2, 3)
+    with torch.no_grad():
+        untiled = head(z1, beta)
+        for tile in (5, 8):
+            head.tile = tile
+            assert torch.equal(head(z1, beta), untiled), tile
+        # the halo is what makes it exact: 5x5 tiles convolved on their own differ
+        x = torch.stack([z1, torch.einsum('bc,chw->bhw', beta, gradient_maps(*shape))], 1)
+        no_halo = torch.cat(
+            [
+                torch.cat(
+                    [head.convolve(x[:, :, r:r + 5, c:c + 5]) for c in range(0, shape[1], 5)], 2
+                )
+                for r in range(0, shape[0], 5)
+            ],
+            1,
+        )
+        assert no_halo.shape == untiled.shape and not torch.equal(no_halo, untiled)
+
+
+@pytest.mark.parametrize('checkpoint', sorted(p.stem for p in PACKAGED_DIR.glob('*.pt')))
+def test_shipped_checkpoint_fast_equals_reference(checkpoint):
+    """The Grounder (cached table) gives the reference forward's maps for every shipped model."""
+    grounder = Grounder(load_checkpoint(checkpoint))
+    model = grounder.model
+    rng = np.random.default_rng(11)
+    instruction = grounder.vocab.words[5]
+    for shape in ((10, 10), (1, 23), (33, 20)):
+        grid = rng.integers(0, len(grounder.entities), shape)
+        grounding = grounder.ground(grid, instruction)
+        with torch.no_grad():
+            values, aux = model(
+                torch.as_tensor(grid)[None],
+                torch.as_tensor(grounder.vocab.encode_batch([instruction])),
+                return_aux=True,
+                **({'reference': True} if hasattr(model, 'pair_forward') else {}),
+            )
+        np.testing.assert_allclose(grounding.values, values[0].numpy(), **TOLERANCE)
+        np.testing.assert_allclose(
+            grounding.relation_map, aux['relation_map'][0].numpy(), **TOLERANCE
+        )
+        if aux['attention'] is not None:
+            np.testing.assert_allclose(grounding.attention, aux['attention'][0], **TOLERANCE)
+    assert list(grounder.text_codes) == [instruction]  # computed once, for the three maps
+
+
+def test_grounder_keeps_recent_instructions_only():
+    grounder = Grounder(load_checkpoint('pw_t-rnet-attn'), cached_instructions=2)
+    grid = generator.generate(1, seed=12, mode='mixed').grids[0]
+    first = grounder.ground(grid, 'reach the star')
+    grounder.ground(grid, 'reach the rock')
+    grounder.ground(grid, 'reach the star')  # used again: now the most recent
+    grounder.ground(grid, 'reach the tree')
+    assert list(grounder.text_codes) == ['reach the star', 'reach the tree']
+    np.testing.assert_array_equal(grounder.ground(grid, 'reach the star').values, first.values)
