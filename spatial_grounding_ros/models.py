@@ -189,7 +189,7 @@ class OutputHead(nn.Module):
     PQ 0.881 -> 0.906, at +3 ms on a 128x128 map. No final ReLU: true values go negative (puddles,
     down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes.
 
-    `axial`: the second layer also reads axial_views of the first layer's channels, so the
+    `axial`: the second layer also reads AxialViews of the first layer's channels, so the
     head can compare what lies anywhere along a row or column, not only within 6 cells.
     """
 
@@ -215,30 +215,56 @@ class OutputHead(nn.Module):
         self.tile = 256
 
     def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
-        b, h, w = z1.shape
+        h, w = z1.shape[1:]
         z2 = torch.einsum('bc,chw->bhw', beta, gradient_maps(h, w, z1.device, self.gradient_cells))
         x = torch.stack([z1, z2], dim=1)
+        if not self.axial:
+            return self.tiled(x, first=0)
+        # the views are map-wide: the first layer runs on the whole map (8 channels a cell)
+        x = self.convolve(x, first=0, last=1)
+        return self.tiled(x, first=1, views=AxialViews(x))
+
+    def tiled(self, x: torch.Tensor, first: int, views: AxialViews | None = None) -> torch.Tensor:
+        """Run layers first.. on x (B, C, H, W), in tiles when the map is large."""
+        b, _, h, w = x.shape
         if h * w <= self.tile * self.tile:
-            return self.convolve(x)
+            return self.convolve(x, first, views=views, window=(0, h, 0, w))
         # Large maps go through in tiles, so the 8..32-channel activations exist for one tile
         # at a time. Each 3x3 convolution reaches one cell further, so a tile read with a halo
-        # of len(convs) cells has exact values everywhere inside it: the zero padding at the
+        # of one cell per layer has exact values everywhere inside it: the zero padding at the
         # halo's cut edges only reaches into the halo. At the map's own edges the tile is cut
         # where the map ends, so the padding there is the untiled padding.
-        halo, t = len(self.convs), self.tile
-        values = z1.new_empty(b, h, w)
+        halo, t = len(self.convs) - first, self.tile
+        values = x.new_empty(b, h, w)
         for top in range(0, h, t):
             for left in range(0, w, t):
                 bottom, right = min(top + t, h), min(left + t, w)
                 r0, c0 = max(top - halo, 0), max(left - halo, 0)
-                tile = self.convolve(x[:, :, r0:min(bottom + halo, h), c0:min(right + halo, w)])
+                r1, c1 = min(bottom + halo, h), min(right + halo, w)
+                tile = self.convolve(
+                    x[:, :, r0:r1, c0:c1], first, views=views, window=(r0, r1, c0, c1)
+                )
                 values[:, top:bottom, left:right] = tile[
                     :, top - r0:bottom - r0, left - c0:right - c0
                 ]
         return values
 
-    def convolve(self, x: torch.Tensor, layout=None) -> torch.Tensor:
-        """(B, 2, H, W) -> (B, H, W) through the convolutions."""
+    def convolve(
+        self,
+        x: torch.Tensor,
+        first: int = 0,
+        last: int | None = None,
+        views: AxialViews | None = None,
+        window: tuple[int, int, int, int] | None = None,
+        layout=None,
+    ) -> torch.Tensor:
+        """
+        Run layers first..last-1 on x (B, C, H, W).
+
+        Through the last layer: (B, H, W) values; else the activations. `views` of the whole
+        map join the second layer's input, cut to `window` (top, bottom, left, right) of x.
+        """
+        last = len(self.convs) if last is None else last
         if layout is None:
             # channels-last is oneDNN's fast layout on CPU for batches and large maps (one
             # thread: 2.3x on a 512x512 map, 1.6x on a training batch of 24x24 maps); one map
@@ -246,52 +272,50 @@ class OutputHead(nn.Module):
             big = x.shape[0] > 1 or x.shape[2] * x.shape[3] > 96 * 96
             layout = torch.channels_last if big else torch.contiguous_format
         x = x.contiguous(memory_format=layout)
-        for n, conv in enumerate(self.convs):
-            if n == 1 and self.axial:
-                x = torch.cat([x, axial_views(x)], 1)
-            x = conv(x)
+        for n in range(first, last):
+            if n == 1 and views is not None:
+                x = torch.cat([x, views.window(*window)], 1)
+            x = self.convs[n](x)
             if n < len(self.convs) - 1:
                 x = F.leaky_relu(x, self.slope, inplace=True)  # the conv's own output
-        return x[:, 0]
+        return x[:, 0] if last == len(self.convs) else x
+
+
+class AxialViews:
+    """
+    Map-wide views of each channel of x (B, C, H, W), cut to any window as (B, 6C, h, w).
+
+    Per channel and cell: the maxima of the cell's row and of its column, and of all cells
+    strictly west, east, north and south of its column or row. A 3x3 stack sees 13x13 cells;
+    these let it answer "westernmost rock" (a rock with no rock in a column to its west), "row of
+    the tree and column of the house" and "two below the northernmost house" on a map of any
+    size, at O(HW) cost. Where no cell lies beyond (the first column, ...), the channel's
+    map-wide minimum stands in, so values stay in range. Only the profiles along one row and
+    one column are kept, so tiles of a large map share them.
+    """
+
+    def __init__(self, x: torch.Tensor):
+        low = x.amin(dim=(2, 3))[..., None]  # (B, C, 1)
+        cols, rows = x.amax(dim=2), x.amax(dim=3)  # (B, C, W), (B, C, H)
+
+        def beyond(profile: torch.Tensor) -> torch.Tensor:
+            """Max over the entries before each one along the last axis (exclusive prefix max)."""
+            return torch.cat([low, profile.cummax(-1).values[..., :-1]], -1)
+
+        # constant along a column (varies with the column) / along a row
+        self.by_column = torch.stack([cols, beyond(cols), beyond(cols.flip(-1)).flip(-1)], 1)
+        self.by_row = torch.stack([rows, beyond(rows), beyond(rows.flip(-1)).flip(-1)], 1)
+
+    def window(self, top: int, bottom: int, left: int, right: int) -> torch.Tensor:
+        row = self.by_row[..., top:bottom, None].expand(-1, -1, -1, -1, right - left)
+        column = self.by_column[..., None, left:right].expand(-1, -1, -1, bottom - top, -1)
+        # the order the second layer's weights were trained on: row, column, west, east, north,
+        # south, each for all channels
+        order = [row[:, 0], column[:, 0], column[:, 1], column[:, 2], row[:, 1], row[:, 2]]
+        return torch.cat(order, 1)
 
 
 AXIAL_VIEWS = 6
-
-
-def axial_views(x: torch.Tensor) -> torch.Tensor:
-    """
-    Return (B, 6C, H, W) map-wide views of each channel.
-
-    Per channel: the maxima of the cell's row and of its column, and of all cells strictly
-    west, east, north and south of its column or row.
-
-    A 3x3 stack sees 13x13 cells; these let it answer "westernmost rock" (a rock with no rock
-    in a column to its west), "row of the tree and column of the house" and "two below the
-    northernmost house" on a map of any size, at O(HW) cost. Where no cell lies beyond (the
-    first column, ...), the channel's map-wide minimum stands in, so values stay in range.
-    """
-    b, c, h, w = x.shape
-    low = x.amin(dim=(2, 3), keepdim=True)  # (B, C, 1, 1)
-    cols, rows = x.amax(dim=2), x.amax(dim=3)  # (B, C, W), (B, C, H)
-
-    def beyond(profile: torch.Tensor) -> torch.Tensor:
-        """Max over the entries before each one along the last axis (exclusive prefix max)."""
-        before = profile.cummax(-1).values[..., :-1]
-        return torch.cat([low[..., 0].expand(-1, -1, 1), before], -1)
-
-    west, east = beyond(cols), beyond(cols.flip(-1)).flip(-1)
-    north, south = beyond(rows), beyond(rows.flip(-1)).flip(-1)
-    return torch.cat(
-        [
-            rows[..., None].expand(b, c, h, w),
-            cols[:, :, None].expand(b, c, h, w),
-            west[:, :, None].expand(b, c, h, w),
-            east[:, :, None].expand(b, c, h, w),
-            north[..., None].expand(b, c, h, w),
-            south[..., None].expand(b, c, h, w),
-        ],
-        1,
-    )
 
 
 class TRNet(nn.Module):

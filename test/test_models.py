@@ -11,7 +11,7 @@ from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
 from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
 from spatial_grounding_ros.models import (
-    axial_views,
+    AxialViews,
     build_model,
     ModelConfig,
     MODELS,
@@ -82,7 +82,7 @@ def test_any_map_size(shape):
 
 def test_axial_views_are_the_map_wide_maxima_they_name():
     x = torch.randn(2, 3, 5, 7)
-    views = axial_views(x).unflatten(1, (6, 3))  # (B, view, C, H, W)
+    views = AxialViews(x).window(0, 5, 0, 7).unflatten(1, (6, 3))  # (B, view, C, H, W)
     low = x.amin(dim=(2, 3))
     for r in range(5):
         for c in range(7):
@@ -99,6 +99,10 @@ def test_axial_views_are_the_map_wide_maxima_they_name():
             ]
             for view, want in enumerate(expected):
                 torch.testing.assert_close(views[:, view, :, r, c], want)
+    # a window of the map has the map-wide views of its cells
+    torch.testing.assert_close(
+        AxialViews(x).window(1, 4, 2, 6), AxialViews(x).window(0, 5, 0, 7)[..., 1:4, 2:6]
+    )
 
 
 @pytest.mark.parametrize('shape', [(1, 6), (6, 1), (9, 14)])
