@@ -79,8 +79,8 @@ FLOOR = {
     **{f: 0.9 for f in LOCAL_FAMILIES},
     'extreme': 0.9,
     'closest': 0.7,
-    'extreme-offset': 0.85,
-    'row-col': 0.6,
+    'extreme-offset': 0.9,
+    'row-col': 0.8,
     'between': 0.9,
 }
 
