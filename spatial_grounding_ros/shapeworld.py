@@ -196,6 +196,23 @@ def statement(subject: tuple[int, int], relation: str, reference: tuple[int, int
     return f'{phrase(subject)} is {relation} {phrase(reference)}'
 
 
+INVERSE = {
+    'to the left of': 'to the right of',
+    'to the right of': 'to the left of',
+    'above': 'below',
+    'below': 'above',
+}
+
+
+def converse(text: str) -> str:
+    """'X is left of Y' -> 'Y is right of X': the same claim, so the same label."""
+    for relation in RELATIONS:
+        subject, sep, reference = text.partition(f' is {relation} ')
+        if sep:
+            return f'{reference} is {INVERSE[relation]} {subject}'
+    raise ValueError(f'not a ShapeWorld statement: {text!r}')
+
+
 def truth(
     objects: np.ndarray, subject: tuple[int, int], relation: str, reference: tuple[int, int]
 ) -> bool | None:
