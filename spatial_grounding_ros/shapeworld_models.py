@@ -12,13 +12,17 @@ softmax of the paper is in the cross-entropy loss. The text encoder is models.py
 
 t-RNetAttn (paper section 3.2, appendix A "In ShapeWorld we use the same architectures ... except
 for replacing the final convolution layer with a dense layer followed by a softmax"):
-- phi: a small CNN reduces the image to a grid of cells (64x64 -> 8x8, a cell is 8 pixels),
-  each a feature vector of `cell_dim` (the paper's k). The features are continuous, so the relation
-  is computed on every pair's features (no table over entity kinds, as on grids).
+- phi: a small CNN reduces the image to a grid of cells: a stem embeds each 4x4 patch, a 3x3
+  convolution block halves that to 8x8, a 1x1 convolution gives each cell `cell_dim` features
+  (the paper's k), and a 2x2 max-pool keeps 4x4 cells of 16 pixels, about one object each. The
+  receptive field stays local (16 pixels before the pool): with the four-block CNN of t-VGG
+  (46 pixels) a cell sees most of the image, and the model memorised training images instead.
+  The features are continuous, so the relation is computed on every pair's features (no table
+  over entity kinds, as on grids).
 - r_ij = f([phi_i; phi_j; l_ij]) over *every* pair of cells i != j, not the 8 neighbours: the
-  objects a statement relates are anywhere in the image, a few cells apart (the paper's footnote
-  extends the neighbourhood this way). l_ij is j's offset from i, (d_col, d_row) / 7: on all
-  pairs, one scalar code cannot tell left from right without a periodic function.
+  objects a statement relates are anywhere in the image (the paper's footnote extends the
+  neighbourhood this way). l_ij is j's offset from i, (d_col, d_row) / 3: over all pairs, one
+  scalar code cannot tell left from right without a periodic function.
 - f's weights are decoded from the words with attention, as on grids: alpha_ij(k) ~
   exp(h(k)^T A [phi_i; phi_j]).
 - Z1[i] = max over j of r_ij, flattened, a linear layer to 2 logits.
@@ -72,7 +76,7 @@ class ShapeWorldConfig:
 
 def conv_blocks(channels: tuple, stem: int) -> nn.Sequential:
     """
-    A stem, then 3x3 convolution, batch norm, ReLU, 2x2 max-pool per further entry of `channels`.
+    Build a stem, then 3x3 convolution, batch norm, ReLU, 2x2 max-pool per further channel count.
 
     The stem embeds each stem x stem patch of pixels (a convolution with that stride, batch norm,
     ReLU): full-resolution 3x3 convolutions cost most of a step and add little on flat shapes.
@@ -123,14 +127,15 @@ class ShapeWorldTRNet(nn.Module):
         self.register_buffer('offsets', pair_offsets(self.grid), persistent=False)
         self.register_buffer('self_pair', torch.eye(n, dtype=torch.bool), persistent=False)
         self.classify = nn.Linear(n, 2)  # Z1 flattened -> (false, true)
+        # Start as "true by the mean of Z1": every cell's relation score then pushes the same
+        # way, so the max pair of each cell learns what true statements share. From a random
+        # head the cells' gradients cancel out, and every run sat at chance for epochs.
+        with torch.no_grad():
+            self.classify.weight.copy_(torch.tensor([-1.0, 1.0])[:, None].expand(2, n) / n)
+            self.classify.bias.zero_()
 
-    def split_params(self, params: torch.Tensor) -> list[torch.Tensor]:
-        """Cut decoded parameters (..., P) into the relation MLP's weights (..., out, in)."""
-        weights, start = [], 0
-        for out, inp in self.layer_shapes:
-            weights.append(params[..., start:start + out * inp].unflatten(-1, (out, inp)))
-            start += out * inp
-        return weights
+    # decoded parameters (..., P) -> the relation MLP's weights (..., out, in), by layer_shapes
+    split_params = TRNet.split_params
 
     def forward(self, images: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b, k = len(images), self.cfg.cell_dim

@@ -348,15 +348,13 @@ def reproduce(
     if not eval_only:
         # the models train side by side, one process and `threads` threads each
         with ProcessPoolExecutor(len(models), mp_context=get_context('spawn')) as pool:
-            runs = [
-                pool.submit(
-                    train,
-                    name,
-                    out / 'checkpoints',
-                    TrainConfig(epochs=max(1, round(EPOCHS[name] * epochs_scale)), threads=threads),
-                    cache_dir,
-                )
+            configs = [
+                TrainConfig(epochs=max(1, round(EPOCHS[name] * epochs_scale)), threads=threads)
                 for name in models
+            ]
+            runs = [
+                pool.submit(train, name, out / 'checkpoints', tc, cache_dir)
+                for name, tc in zip(models, configs)
             ]
             for name, run in zip(models, runs):
                 path, _ = run.result()
