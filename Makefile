@@ -7,7 +7,8 @@ DATA ?=
 DATA_ARG := $(if $(DATA),--data $(DATA))
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl bench clean
+.PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl \
+	reproduce-shapeworld bench clean
 
 setup: $(STAMP)
 
@@ -40,6 +41,12 @@ reproduce-ablation: $(STAMP)
 # RL rows of the paper's table (about an hour on 2 cores): results/rl.json, results/rl.md
 reproduce-rl: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce-rl $(DATA_ARG) --out results
+
+# ShapeWorld (generated, cached in ~/.cache/spatial_grounding_ros): trains t-VGG and t-RNetAttn
+# one after the other, one thread each, ships their checkpoints, evaluates them clean and under
+# noise: results/shapeworld.json, results/shapeworld.md, results/shapeworld_noise.md
+reproduce-shapeworld: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce-shapeworld --out results
 
 bench: $(STAMP)
 	$(VENV)/bin/spatial-grounding bench --out results/bench.json

@@ -82,10 +82,8 @@ def resolve_checkpoint(name: str | Path) -> Path:
     )
 
 
-def load_checkpoint(
-    name: str | Path, expect_model: str | None = None, expect_entities: EntityTable | None = None
-) -> Loaded:
-    path = resolve_checkpoint(name)
+def read_checkpoint(path: Path) -> tuple[dict, dict]:
+    """(header, state_dict) of a checkpoint file of this package's format, any task."""
     try:
         blob = torch.load(path, map_location='cpu', weights_only=True)
     except Exception as exc:  # torch raises many types on a corrupt or foreign file
@@ -101,6 +99,16 @@ def load_checkpoint(
         raise ValueError(
             f'{path}: checkpoint format {header.get("format")!r}, expected {FORMAT!r}'
         )
+    return header, blob['state_dict']
+
+
+def load_checkpoint(
+    name: str | Path, expect_model: str | None = None, expect_entities: EntityTable | None = None
+) -> Loaded:
+    path = resolve_checkpoint(name)
+    header, state_dict = read_checkpoint(path)
+    if header.get('task') == 'shapeworld':
+        raise ValueError(f'{path}: a ShapeWorld image classifier; use it with --task shapeworld')
     name_ = header.get('model')
     if name_ not in MODELS:
         raise ValueError(f'{path}: unknown model {name_!r} in checkpoint')
@@ -125,7 +133,7 @@ def load_checkpoint(
         )
     model = build_model(name_, cfg)
     try:
-        model.load_state_dict(blob['state_dict'])
+        model.load_state_dict(state_dict)
     except RuntimeError as exc:
         first = str(exc).splitlines()[0]
         raise ValueError(f'{path}: weights do not fit model {name_!r}: {first}') from exc

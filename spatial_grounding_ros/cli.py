@@ -22,11 +22,15 @@ from .datasets import DEFAULT_DATA, SPLITS, TASKS
 
 
 def cmd_train(args) -> int:
+    from . import shapeworld_training
     from .training import train_supervised, TrainConfig
+
+    if args.task == shapeworld_training.TASK:
+        return shapeworld_training.cmd_train(args)
 
     tc = TrainConfig(
         epochs=args.epochs,
-        batch_size=args.batch_size,
+        batch_size=TrainConfig.batch_size if args.batch_size is None else args.batch_size,
         lr=args.lr,
         seed=args.seed,
         threads=args.threads,
@@ -43,9 +47,13 @@ def cmd_train(args) -> int:
 
 
 def cmd_eval(args) -> int:
+    from . import shapeworld_training
     from .checkpoints import load_checkpoint
     from .datasets import load_task
     from .training import evaluate
+
+    if args.task == shapeworld_training.TASK or args.image_noise or args.text_noise:
+        return shapeworld_training.cmd_eval(args)
 
     data = load_task(args.task, args.split, args.data)
     loaded = load_checkpoint(args.checkpoint, expect_entities=data.entities)
@@ -125,18 +133,25 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import shapeworld_training
     from .models import MODELS
+    from .shapeworld_models import MODELS as SHAPEWORLD_MODELS
+
+    tasks = [*TASKS, shapeworld_training.TASK]
+    models = [*MODELS, *(m for m in SHAPEWORLD_MODELS if m not in MODELS)]
 
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
 
     t = sub.add_parser('train', help="supervised training on a task's train split")
-    t.add_argument('--task', required=True, choices=TASKS)
-    t.add_argument('--model', required=True, choices=list(MODELS))
+    t.add_argument('--task', required=True, choices=tasks)
+    t.add_argument('--model', required=True, choices=models)
     t.add_argument('--data', default=DEFAULT_DATA)
     t.add_argument('--out', default='out')
     t.add_argument('--epochs', type=int, default=None)
-    t.add_argument('--batch-size', type=int, default=64)
+    t.add_argument(
+        '--batch-size', type=int, default=None, help='default: 64, ShapeWorld 32 (per task)'
+    )
     t.add_argument(
         '--attention-warmup',
         type=float,
@@ -183,11 +198,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     e = sub.add_parser('eval', help='evaluate a checkpoint on a split')
     e.add_argument('--checkpoint', required=True)
-    e.add_argument('--task', required=True, choices=TASKS)
+    e.add_argument('--task', required=True, choices=tasks)
     e.add_argument('--split', default='test', choices=SPLITS)
     e.add_argument('--data', default=DEFAULT_DATA)
     e.add_argument('--json', action='store_true', help='print exactly one JSON object')
     e.set_defaults(func=cmd_eval)
+    shapeworld_training.add_cli_options(t, e)
 
     r = sub.add_parser('reproduce', help='train and evaluate the value-map table')
     r.add_argument('--data', default=DEFAULT_DATA)
@@ -271,9 +287,14 @@ def _extensions():
     bench, bags, the suite, and the closed-loop demo, which needs rclpy (without it, every other
     subcommand still works).
     """
-    from . import bags, bench, suite
+    from . import bags, bench, shapeworld_training, suite
 
-    found = [bench.register_cli, bags.register_cli, suite.register_cli]
+    found = [
+        bench.register_cli,
+        bags.register_cli,
+        suite.register_cli,
+        shapeworld_training.register_cli,
+    ]
     try:
         from .ros import demo
     except ImportError:

@@ -21,7 +21,10 @@ from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / 'results'
-SHIPPED = sorted(p.name for p in PACKAGED_DIR.glob('*.pt'))
+# the value-map checkpoints; ShapeWorld's classifiers have results/shapeworld.json
+SHIPPED = sorted(
+    p.name for p in PACKAGED_DIR.glob('*.pt') if not p.name.startswith('shapeworld_')
+)
 
 
 def value_map_rows() -> list[dict]:
@@ -129,6 +132,7 @@ def readme_section(heading: str) -> str:
         ('Results: clear references', 'suite.md'),
         ('Results: clear references', 'ablation.md'),
         ('Benchmarks', 'bench.md'),
+        ('Results: ShapeWorld', 'shapeworld.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):
@@ -220,3 +224,56 @@ def test_bench_table_is_the_json():
     result = json.loads((RESULTS / 'bench.json').read_text())
     assert (RESULTS / 'bench.md').read_text() == bench.table(result)
     assert [row['map'] for row in result['sizes']] == [f'{n}x{n}' for n in bench.SIZES]
+
+
+# --- ShapeWorld ---------------------------------------------------------------------------
+
+
+def shapeworld_results() -> dict:
+    return json.loads((RESULTS / 'shapeworld.json').read_text())
+
+
+def test_shapeworld_tables_are_the_json():
+    """results/shapeworld.md and shapeworld_noise.md hold shapeworld.json's accuracies."""
+    results = shapeworld_results()
+    [table] = tables((RESULTS / 'shapeworld.md').read_text())
+    rows = rows_by_header(table)
+    assert [r['model'] for r in rows] == [r['model'] for r in results['runs']]
+    for row, run in zip(rows, results['runs']):
+        assert same_number(row['ACC ours'], run['test']['acc']), row['model']
+        assert int(row['n']) == run['test']['n']
+    [table] = tables((RESULTS / 'shapeworld_noise.md').read_text())
+    noise = {(e['noise'], int(e['k']), e['model']): e['acc'] for e in results['noise']}
+    cells = 0
+    for row in rows_by_header(table):
+        for header, cell in row.items():
+            if header.endswith(' ACC'):
+                model = header.removesuffix(' ACC')
+                assert same_number(cell, noise[row['noise'], int(row['k']), model])
+                cells += 1
+    assert cells == len(noise)
+
+
+def test_shapeworld_docs_page_shows_the_noise_table():
+    """docs/shapeworld.md has results/shapeworld_noise.md's table, cell for cell."""
+    [expected] = tables((RESULTS / 'shapeworld_noise.md').read_text())
+    docs = (REPO / 'docs' / 'shapeworld.md').read_text()
+    assert expected in tables(docs)
+    assert 'docs/shapeworld.md' in readme_section('Results: ShapeWorld')
+
+
+@pytest.mark.parametrize('run', shapeworld_results()['runs'], ids=lambda r: r['model'])
+def test_shipped_shapeworld_checkpoint_evaluates_to_its_row(run, tmp_path_factory, capsys):
+    """
+    `spatial-grounding eval` on the shipped checkpoint gives its results row.
+
+    The test split is regenerated from its seed (into a fresh cache); another CPU's rounding can
+    flip an example whose probability is a near-tie at 0.5: two such flips allowed.
+    """
+    cache = tmp_path_factory.mktemp('shapeworld_cache')
+    name = run['checkpoint'].removesuffix('.pt')
+    argv = ['eval', '--checkpoint', name, '--task', 'shapeworld', '--split', 'test', '--json']
+    assert cli.main(argv + ['--cache', str(cache)]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got['model'] == run['model'] and got['n'] == run['test']['n']
+    assert got['acc'] == pytest.approx(run['test']['acc'], abs=2 / run['test']['n'])

@@ -1,0 +1,220 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+ShapeWorld: the generator's invariants, the noise, both models learning, the commands.
+
+Truth is checked by a reader of the statements written here from the task's definition (centres
+compared along the relation's axis), not by the generator's own `truth`.
+"""
+
+import json
+import re
+
+import numpy as np
+import pytest
+from spatial_grounding_ros import cli
+from spatial_grounding_ros import shapeworld as sw
+from spatial_grounding_ros.checkpoints import load_checkpoint
+from spatial_grounding_ros.shapeworld_models import build_model, ShapeWorldConfig
+from spatial_grounding_ros.shapeworld_training import (
+    as_input,
+    encode,
+    load,
+    train,
+    TrainConfig,
+)
+from spatial_grounding_ros.text import Vocabulary
+import torch
+import torch.nn.functional as F
+
+N = 400
+
+
+@pytest.fixture(autouse=True)
+def one_thread():
+    """One torch thread: on a busy 2-core machine a second one waits more than it works."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+@pytest.fixture(scope='module')
+def data():
+    return sw.generate(N, seed=7)
+
+
+def boxes(objects):
+    return [tuple(o) for o in objects if o[0] >= 0]
+
+
+def test_scenes_have_4_or_5_objects_apart_from_each_other(data):
+    for objects in data.objects:
+        objs = boxes(objects)
+        assert len(objs) in (4, 5)
+        for n, (shape, colour, x0, y0, size) in enumerate(objs):
+            assert 0 <= shape < 8 and 0 <= colour < 8
+            assert 0 <= x0 and x0 + size <= 64 and 0 <= y0 and y0 + size <= 64
+            for _, _, x1, y1, size1 in objs[n + 1:]:
+                apart_x = x0 + size + sw.GAP <= x1 or x1 + size1 + sw.GAP <= x0
+                apart_y = y0 + size + sw.GAP <= y1 or y1 + size1 + sw.GAP <= y0
+                assert apart_x or apart_y
+
+
+def test_images_show_the_objects_in_their_colours(data):
+    for image, objects in zip(data.images[:50], data.objects[:50]):
+        covered = np.zeros((64, 64), dtype=bool)
+        for shape, colour, x0, y0, size in boxes(objects):
+            box = image[y0:y0 + size, x0:x0 + size].astype(float)
+            lit = box.max(-1) > 0
+            assert lit.mean() > 0.3, 'an object covers a good part of its box'
+            rgb = np.array(sw.COLOURS[sw.COLOUR_NAMES[colour]])
+            mean = box[lit].mean(0) / 255
+            # the colour up to the object's shade
+            assert np.allclose(mean / mean.max(), rgb / rgb.max(), atol=0.02)
+            covered[y0:y0 + size, x0:x0 + size] = True
+        assert image[~covered].max() == 0, 'black outside the objects'
+
+
+SENTENCE = re.compile(
+    r'an? (?:(\w+) )?(\w+) is (to the left of|to the right of|above|below) an? (?:(\w+) )?(\w+)$'
+)
+
+
+def read(text):
+    """((shape, colour), relation, (shape, colour)) by name, None where not named."""
+    colour1, noun1, relation, colour2, noun2 = SENTENCE.match(text).groups()
+
+    def description(colour, noun):
+        if noun in sw.COLOURS:  # only a colour word is never the noun...
+            raise AssertionError(text)
+        return (None if noun == 'shape' else noun, colour)
+
+    return description(colour1, noun1), relation, description(colour2, noun2)
+
+
+def fits(obj, description):
+    shape, colour = description
+    return (shape is None or sw.SHAPES[obj[0]] == shape) and (
+        colour is None or sw.COLOUR_NAMES[obj[1]] == colour
+    )
+
+
+def test_labels_are_true_to_the_scene_and_false_ones_plausible(data):
+    for text, label, objects in zip(data.statements, data.labels, data.objects):
+        subject, relation, reference = read(text)
+        objs = boxes(objects)
+        a = [o for o in objs if fits(o, subject)]
+        b = [o for o in objs if fits(o, reference)]
+        assert a and b, f'{text}: both objects exist'
+        assert not [o for o in a if fits(o, reference)], f'{text}: no object is both'
+        axis = 0 if 'left' in relation or 'right' in relation else 1
+        sign = -1 if relation in ('to the left of', 'above') else 1
+
+        def centre(o):
+            return o[2 + axis] + (o[4] - 1) / 2
+
+        holds = any(sign * (centre(p) - centre(q)) > 0 for p in a for q in b)
+        assert holds == bool(label), text
+        assert all(abs(centre(p) - centre(q)) >= sw.MARGIN for p in a for q in b)
+
+
+def test_labels_are_balanced_overall_and_per_kind_of_statement(data):
+    assert data.labels.mean() == 0.5
+    by_relation = {}
+    for text, label in zip(data.statements, data.labels):
+        by_relation.setdefault(read(text)[1], []).append(label)
+    assert set(by_relation) == set(sw.RELATIONS)
+    for relation, labels in by_relation.items():
+        # about 100 each: 5 standard deviations from a half
+        assert abs(np.mean(labels) - 0.5) < 5 * 0.5 / np.sqrt(len(labels)), relation
+    kinds = {(s is None, c is None) for text in data.statements for s, c in read(text)[::2]}
+    assert kinds == {(False, True), (True, False), (False, False)}, 'shape, colour and both'
+
+
+def test_generation_is_seeded_and_cached(tmp_path):
+    a = sw.load_split('test', tmp_path, n=30)
+    [path] = tmp_path.glob('*.npz')
+    before = path.stat().st_mtime_ns
+    b = sw.load_split('test', tmp_path, n=30)
+    assert path.stat().st_mtime_ns == before, 'the second call reads the file'
+    assert np.array_equal(a.images, b.images) and a.statements == b.statements
+    assert np.array_equal(a.images, sw.generate(30, seed=sw.SPLIT_SEEDS['test']).images)
+    train_split = sw.load_split('train', tmp_path, n=30)
+    assert train_split.statements != a.statements, 'splits come from different streams'
+    path.write_bytes(b'garbage')
+    with pytest.raises(ValueError, match='corrupt ShapeWorld cache'):
+        sw.load_split('test', tmp_path, n=30)
+    with pytest.raises(ValueError, match='no split'):
+        sw.load_split('dev', tmp_path)
+
+
+def test_noise_leaves_objects_and_statement_words_in_place(data):
+    rng = np.random.default_rng(0)
+    noisy = sw.image_noise(data.images[:20], data.objects[:20], 5, rng)
+    clean = data.images[:20].astype(np.float32) / 255
+    for n in range(20):
+        for _, _, x0, y0, size in boxes(data.objects[n]):
+            box = np.s_[y0:y0 + size, x0:x0 + size]
+            assert np.array_equal(noisy[n][box], clean[n][box])
+        changed = (noisy[n] != clean[n]).any(-1).sum()
+        assert changed >= 4 * sw.NOISE_PATCH**2, 'five patches (a few values may be exactly 0)'
+    texts = sw.text_noise(data.statements[:20], 3, np.random.default_rng(0))
+    for noisy_text, text in zip(texts, data.statements[:20]):
+        words = noisy_text.split()
+        assert len(words) == len(text.split()) + 3
+        inserted = [w for w in words if w not in text.split() or w in sw.NOISE_WORDS]
+        assert len(inserted) >= 3
+    assert sw.text_noise(['a b'], 0, rng) == ['a b']
+
+
+@pytest.mark.parametrize('name', ['t-rnet-attn', 't-vgg'])
+def test_model_trains_and_its_loss_falls(name, data):
+    torch.manual_seed(0)
+    vocab = Vocabulary.build(data.statements)
+    model = build_model(name, ShapeWorldConfig(vocab_size=len(vocab)))
+    x, t = as_input(data.images[:8]), encode(vocab, data.statements[:8])
+    y = torch.from_numpy(data.labels[:8])
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+    losses = []
+    for _ in range(12):  # eight examples: memorising them is enough to see it learn
+        loss = F.cross_entropy(model(x, t), y)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    assert losses[-1] < 0.8 * losses[0], losses
+    logits, aux = model(x, t, return_aux=True)
+    assert logits.shape == (8, 2)
+
+
+def test_train_and_eval_commands(tmp_path, capsys):
+    path, summary = train(
+        't-rnet-attn',
+        tmp_path,
+        TrainConfig(epochs=1, train_size=40, batch_size=16),
+        cache_dir=tmp_path,
+        progress=False,
+    )
+    assert path.name == 'shapeworld_t-rnet-attn.pt' and summary['val_examples'] == 4
+    argv = ['eval', '--checkpoint', str(path), '--task', 'shapeworld', '--split', 'test',
+            '--cache', str(tmp_path), '--json']
+    assert cli.main(argv) == 0
+    clean = json.loads(capsys.readouterr().out)
+    assert clean['n'] == 500 and 0 <= clean['acc'] <= 1
+    assert clean['model'] == 't-rnet-attn'
+    assert cli.main(argv + ['--image-noise', '2', '--text-noise', '3']) == 0
+    noisy = json.loads(capsys.readouterr().out)
+    assert (noisy['image_noise'], noisy['text_noise'], noisy['n']) == (2, 3, 500)
+    # a ShapeWorld checkpoint is not a grid model, and the other way round: one clear line
+    with pytest.raises(ValueError, match='ShapeWorld image classifier'):
+        load_checkpoint(path)
+    with pytest.raises(ValueError, match='not a ShapeWorld checkpoint'):
+        load('pw_t-rnet-attn')
+    assert cli.main(argv[:-1] + ['--image-noise', '-1']) == 2
+    assert cli.main(['train', '--task', 'shapeworld', '--model', 't-cnn']) == 2
+    assert 'no model' in capsys.readouterr().err
