@@ -45,15 +45,22 @@ def cmd_train(args) -> int:
 def cmd_eval(args) -> int:
     from .checkpoints import load_checkpoint
     from .datasets import load_task
+    from .noise import add_noise, NOISES, require_unseen_rows
     from .training import evaluate
 
     data = load_task(args.task, args.split, args.data)
     loaded = load_checkpoint(args.checkpoint, expect_entities=data.entities)
+    noise = {name: getattr(args, name.replace('-', '_')) for name in NOISES}
+    if noise['obs-noise']:
+        require_unseen_rows(loaded.model, loaded.name)
+    for name, k in noise.items():
+        data = add_noise(data, loaded.vocab, name, k, args.seed)
     metrics = {
         'checkpoint': str(args.checkpoint),
         'model': loaded.name,
         'task': args.task,
         'split': args.split,
+        **({'noise': noise, 'seed': args.seed} if any(noise.values()) else {}),
         **evaluate(loaded.model, loaded.vocab, data),
     }
     if args.json:
@@ -187,6 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument('--split', default='test', choices=SPLITS)
     e.add_argument('--data', default=DEFAULT_DATA)
     e.add_argument('--json', action='store_true', help='print exactly one JSON object')
+    add_noise_options(e)
     e.set_defaults(func=cmd_eval)
 
     r = sub.add_parser('reproduce', help='train and evaluate the value-map table')
@@ -218,6 +226,36 @@ def build_parser() -> argparse.ArgumentParser:
     for register in _extensions():
         register(sub)
     return p
+
+
+def noise_count(text: str) -> int:
+    """Parse a noise amount k: an integer in 0..MAX_K."""
+    from .noise import MAX_K
+
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'{text!r} is not a whole number') from None
+    if not 0 <= k <= MAX_K:
+        raise argparse.ArgumentTypeError(f'{k} is outside 0..{MAX_K}')
+    return k
+
+
+def add_noise_options(p) -> None:
+    """--obs-noise, --text-noise, --unknown-words and --seed (noise.py)."""
+    p.add_argument(
+        '--obs-noise', type=noise_count, default=0, metavar='K',
+        help='put K objects of K unseen kinds on free cells of every map',
+    )
+    p.add_argument(
+        '--text-noise', type=noise_count, default=0, metavar='K',
+        help='insert K verbs, articles and absent object names at one position',
+    )
+    p.add_argument(
+        '--unknown-words', type=noise_count, default=0, metavar='K',
+        help='insert K out-of-vocabulary words at one position',
+    )
+    p.add_argument('--seed', type=int, default=0, help='seed of the noise')
 
 
 def add_rl_commands(sub) -> None:
