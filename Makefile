@@ -7,7 +7,7 @@ DATA ?=
 DATA_ARG := $(if $(DATA),--data $(DATA))
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl bench clean
+.PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl reproduce-robustness bench clean
 
 setup: $(STAMP)
 
@@ -40,6 +40,11 @@ reproduce-ablation: $(STAMP)
 # RL rows of the paper's table (about an hour on 2 cores): results/rl.json, results/rl.md
 reproduce-rl: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce-rl $(DATA_ARG) --out results
+
+# The robustness study on the shipped per-task checkpoints (t-RNetAttn, t-RNet, t-CNN where
+# shipped; about 40 minutes on 2 busy cores): results/robustness.json, .md, .png
+reproduce-robustness: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce-robustness $(DATA_ARG) --out results
 
 bench: $(STAMP)
 	$(VENV)/bin/spatial-grounding bench --out results/bench.json

@@ -133,6 +133,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     from .models import MODELS
+    from .noise import add_noise_options
 
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
@@ -228,36 +229,6 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def noise_count(text: str) -> int:
-    """Parse a noise amount k: an integer in 0..MAX_K."""
-    from .noise import MAX_K
-
-    try:
-        k = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a whole number') from None
-    if not 0 <= k <= MAX_K:
-        raise argparse.ArgumentTypeError(f'{k} is outside 0..{MAX_K}')
-    return k
-
-
-def add_noise_options(p) -> None:
-    """--obs-noise, --text-noise, --unknown-words and --seed (noise.py)."""
-    p.add_argument(
-        '--obs-noise', type=noise_count, default=0, metavar='K',
-        help='put K objects of K unseen kinds on free cells of every map',
-    )
-    p.add_argument(
-        '--text-noise', type=noise_count, default=0, metavar='K',
-        help='insert K verbs, articles and absent object names at one position',
-    )
-    p.add_argument(
-        '--unknown-words', type=noise_count, default=0, metavar='K',
-        help='insert K out-of-vocabulary words at one position',
-    )
-    p.add_argument('--seed', type=int, default=0, help='seed of the noise')
-
-
 def add_rl_commands(sub) -> None:
     from .env import GENERATED
     from .models import MODELS
@@ -306,12 +277,18 @@ def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, bags, the suite, and the closed-loop demo, which needs rclpy (without it, every other
-    subcommand still works).
+    bench, bags, the suite, robustness, explain, and the closed-loop demo, which needs rclpy
+    (without it, every other subcommand still works).
     """
-    from . import bags, bench, suite
+    from . import bags, bench, explain, robustness, suite
 
-    found = [bench.register_cli, bags.register_cli, suite.register_cli]
+    found = [
+        bench.register_cli,
+        bags.register_cli,
+        suite.register_cli,
+        robustness.register_cli,
+        explain.register_cli,
+    ]
     try:
         from .ros import demo
     except ImportError:

@@ -26,6 +26,7 @@ three more, on every map, so a curve over k measures more noise on the same maps
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import replace
 
 import numpy as np
@@ -168,3 +169,34 @@ def require_unseen_rows(model, name: str) -> None:
             f'{name} has no embedding rows for unseen kinds, so it cannot be given unseen '
             'objects (t-rnet-attn, t-rnet and t-cnn have them)'
         )
+
+
+# --- command-line options (eval, robustness) ---------------------------------------------
+
+
+def noise_count(text: str) -> int:
+    """Parse a noise amount k: an integer in 0..MAX_K."""
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'{text!r} is not a whole number') from None
+    if not 0 <= k <= MAX_K:
+        raise argparse.ArgumentTypeError(f'{k} is outside 0..{MAX_K}')
+    return k
+
+
+def add_noise_options(p) -> None:
+    """--obs-noise, --text-noise, --unknown-words and --seed (noise.py)."""
+    p.add_argument(
+        '--obs-noise', type=noise_count, default=0, metavar='K',
+        help='put K objects of K unseen kinds on free cells of every map',
+    )
+    p.add_argument(
+        '--text-noise', type=noise_count, default=0, metavar='K',
+        help='insert K verbs, articles and absent object names at one position',
+    )
+    p.add_argument(
+        '--unknown-words', type=noise_count, default=0, metavar='K',
+        help='insert K out-of-vocabulary words at one position',
+    )
+    p.add_argument('--seed', type=int, default=0, help='seed of the noise')
