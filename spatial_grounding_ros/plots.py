@@ -127,7 +127,9 @@ def plot_robustness(rows: list[dict], path: str | Path) -> Path:
         models = [next(r['model'] for r in lines if r['checkpoint'] == c) for c in checkpoints]
         for checkpoint, model in zip(checkpoints, models):
             curve = sorted(
-                (r['k'], 100 * r['md_rel']) for r in lines if r['checkpoint'] == checkpoint
+                (r['k'], 100 * r['md_rel'])
+                for r in lines
+                if r['checkpoint'] == checkpoint and r['md_rel'] is not None
             )
             label = model if models.count(model) == 1 else checkpoint
             ax.plot(*zip(*curve), 'o-', label=label)

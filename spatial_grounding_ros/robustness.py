@@ -64,36 +64,37 @@ def study(
     loaded = [load_checkpoint(c, expect_entities=test.entities) for c in checkpoints]
     for model in loaded:
         require_unseen_rows(model.model, model.name)
-    jobs = [(m, noise, k) for m in range(len(loaded)) for noise in NOISES for k in ks if k]
-    bar = tqdm(total=len(loaded) + len(jobs), desc=f'robustness {task}', disable=not progress)
-    clean = []
-    for model in loaded:
-        clean.append(evaluate(model.model, model.vocab, test))
-        bar.update()
+    bar = tqdm(
+        total=len(loaded) * (1 + len(NOISES) * (len(ks) - 1)),
+        desc=f'robustness {task}',
+        disable=not progress,
+    )
     rows = []
-    for m, noise, k in [(m, noise, 0) for m in range(len(loaded)) for noise in NOISES] + jobs:
-        model = loaded[m]
-        if k:
-            noisy = add_noise(test, model.vocab, noise, k, seed)
-            metrics = evaluate(model.model, model.vocab, noisy)
-            bar.update()
-        else:
-            metrics = clean[m]
-        rows.append(
-            {
-                'task': task,
-                'checkpoint': resolve_checkpoint(checkpoints[m]).name,
-                'model': model.name,
-                'noise': noise,
-                'k': k,
-                **{key: metrics[key] for key in ('mse', 'pq', 'md', 'hit', 'n')},
-                'md_rel': metrics['md'] / clean[m]['md'] - 1,
-                'pq_rel': metrics['pq'] / clean[m]['pq'] - 1,
-            }
-        )
+    for checkpoint, model in zip(checkpoints, loaded):
+        clean = evaluate(model.model, model.vocab, test)
+        bar.update()
+        for noise in NOISES:
+            for k in ks:
+                metrics = clean
+                if k:
+                    noisy = add_noise(test, model.vocab, noise, k, seed)
+                    metrics = evaluate(model.model, model.vocab, noisy)
+                    bar.update()
+                rows.append(
+                    {
+                        'task': task,
+                        'checkpoint': resolve_checkpoint(checkpoint).name,
+                        'model': model.name,
+                        'noise': noise,
+                        'k': k,
+                        **{key: metrics[key] for key in ('mse', 'pq', 'md', 'hit', 'n')},
+                        # relative to a clean MD of 0 (every goal hit) is undefined: None
+                        'md_rel': metrics['md'] / clean['md'] - 1 if clean['md'] else None,
+                        'pq_rel': metrics['pq'] / clean['pq'] - 1,
+                    }
+                )
     bar.close()
-    order = {(r['checkpoint'], r['noise']): i for i, r in enumerate(rows) if not r['k']}
-    return sorted(rows, key=lambda r: (order[r['checkpoint'], r['noise']], r['k']))
+    return rows
 
 
 def minimum_verdict(rows: list[dict]) -> str | None:
@@ -110,19 +111,24 @@ def minimum_verdict(rows: list[dict]) -> str | None:
     }
     parts, holds = [], True
     for task in MINIMUM_TASKS:
-        attn, cnn = rise.get((task, 't-rnet-attn')), rise.get((task, 't-cnn'))
-        if attn is None or cnn is None:
+        if (task, 't-rnet-attn') not in rise or (task, 't-cnn') not in rise:
             return None
-        ok = attn <= MINIMUM_RISE and attn < cnn
+        attn, cnn = rise[task, 't-rnet-attn'], rise[task, 't-cnn']
+        ok = attn is not None and cnn is not None and attn <= MINIMUM_RISE and attn < cnn
         holds &= ok
         parts.append(
-            f'{task}: t-rnet-attn {attn:+.0%}, t-cnn {cnn:+.0%} ({"met" if ok else "not met"})'
+            f'{task}: t-rnet-attn {_percent(attn)}, t-cnn {_percent(cnn)} '
+            f'({"met" if ok else "not met"})'
         )
     verdict = 'holds' if holds else 'does not hold'
     return (
         f'Minimum (k = {MAX_K} unseen objects: t-rnet-attn MD rises by at most '
         f'{MINIMUM_RISE:.0%} and by less than t-cnn): {verdict}. ' + '; '.join(parts) + '.'
     )
+
+
+def _percent(x: float | None) -> str:
+    return '-' if x is None else f'{x:+.0%}'
 
 
 def markdown_table(rows: list[dict], seed: int) -> str:
@@ -142,7 +148,7 @@ def markdown_table(rows: list[dict], seed: int) -> str:
             if (x['task'], x['checkpoint'], x['noise']) == (r['task'], r['checkpoint'], r['noise'])
         ]
         change = {x['k']: x for x in same}
-        cells = [f'{change[k]["md"]:.2f} ({change[k]["md_rel"]:+.0%})' for k in ks]
+        cells = [f'{change[k]["md"]:.2f} ({_percent(change[k]["md_rel"])})' for k in ks]
         lines.append(
             f'| {r["task"]} | {r["model"]} | {r["noise"]} | {r["md"]:.2f} | {r["hit"]:.3f} | '
             + ' | '.join(cells)
@@ -184,12 +190,17 @@ def reproduce_robustness(
     result = {'seed': seed, 'ks': check_ks(ks), 'missing': missing, 'results': rows}
     out.mkdir(parents=True, exist_ok=True)
     (out / 'robustness.json').write_text(json.dumps(result, indent=1) + '\n')
-    table = markdown_table(rows, seed)
-    if missing:
-        table += f'\nNo shipped checkpoint (not in the study): {", ".join(missing)}.\n'
-    (out / 'robustness.md').write_text(table)
+    (out / 'robustness.md').write_text(robustness_markdown(result))
     plot_robustness(rows, out / 'robustness.png')
     return result
+
+
+def robustness_markdown(result: dict) -> str:
+    """Return results/robustness.md: the table, and the checkpoints the study lacked."""
+    table = markdown_table(result['results'], result['seed'])
+    if result['missing']:
+        table += f'\nNo shipped checkpoint (not in the study): {", ".join(result["missing"])}.\n'
+    return table
 
 
 def cmd_robustness(args) -> int:
