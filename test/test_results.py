@@ -128,6 +128,7 @@ def readme_section(heading: str) -> str:
         ('Results: RL', 'rl.md'),
         ('Results: clear references', 'suite.md'),
         ('Results: clear references', 'ablation.md'),
+        ('Results: robustness', 'robustness.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):
@@ -212,3 +213,11 @@ def test_suite_table_is_the_json():
         for cell, run in zip(row[2:], runs.values()):
             summary = run['sizes'][size] if family == '**all**' else run['families'][family][size]
             assert cell.split()[0].strip('*') == f'{summary["hit"]:.1%}', (family, size)
+
+
+def test_robustness_table_is_the_json():
+    """results/robustness.md is what robustness.markdown_table makes of robustness.json."""
+    from spatial_grounding_ros.robustness import robustness_markdown
+
+    study = json.loads((RESULTS / 'robustness.json').read_text())
+    assert (RESULTS / 'robustness.md').read_text() == robustness_markdown(study)
