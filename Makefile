@@ -8,7 +8,7 @@ DATA_ARG := $(if $(DATA),--data $(DATA))
 STAMP := $(VENV)/.installed
 
 .PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl \
-	reproduce-shapeworld bench clean
+	reproduce-shapeworld reproduce-robustness bench clean
 
 setup: $(STAMP)
 
@@ -47,6 +47,16 @@ reproduce-rl: $(STAMP)
 # noise: results/shapeworld.json, results/shapeworld.md, results/shapeworld_noise.md
 reproduce-shapeworld: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce-shapeworld --out results
+
+# The robustness study on the shipped per-task checkpoints (t-RNetAttn, t-RNet, t-CNN where
+# shipped; about 40 minutes on 2 busy cores): results/robustness.json, .md, .png; and the
+# README's explain figures (PW local test examples 6 and 8, and 6 under noise)
+EXPLAIN := $(VENV)/bin/spatial-grounding explain --checkpoint pw-local_t-rnet-attn --task pw-local $(DATA_ARG)
+reproduce-robustness: $(STAMP)
+	$(VENV)/bin/spatial-grounding reproduce-robustness $(DATA_ARG) --out results
+	$(EXPLAIN) --index 6 --out results/explain_success.png
+	$(EXPLAIN) --index 8 --out results/explain_failure.png
+	$(EXPLAIN) --index 6 --obs-noise 10 --text-noise 3 --out results/explain_noise.png
 
 bench: $(STAMP)
 	$(VENV)/bin/spatial-grounding bench --out results/bench.json

@@ -14,14 +14,14 @@ time, not a crash later.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import torch
 from torch import nn
 
 from .entities import EntityTable
-from .models import build_model, ModelConfig, MODELS
+from .models import build_model, EntityEncoder, ModelConfig, MODELS
 from .text import Vocabulary
 
 FORMAT = 'spatial_grounding_ros/1'
@@ -131,9 +131,17 @@ def load_checkpoint(
             f'{path}: header sizes disagree (vocabulary {len(vocab)} vs '
             f'{cfg.vocab_size}, entities {len(entities)} vs {cfg.n_entities})'
         )
+    state = state_dict
+    if cfg.unseen_kinds < ModelConfig.unseen_kinds:
+        # written before models had unseen-kind rows: give it the deterministic ones (models.py)
+        cfg = replace(cfg, unseen_kinds=ModelConfig.unseen_kinds)
     model = build_model(name_, cfg)
+    for prefix, module in model.named_modules():
+        key = f'{prefix}.embed.weight'
+        if isinstance(module, EntityEncoder) and key in state:
+            state[key] = module.with_unseen_rows(state[key])
     try:
-        model.load_state_dict(state_dict)
+        model.load_state_dict(state)
     except RuntimeError as exc:
         first = str(exc).splitlines()[0]
         raise ValueError(f'{path}: weights do not fit model {name_!r}: {first}') from exc

@@ -50,18 +50,27 @@ def cmd_eval(args) -> int:
     from . import shapeworld_training
     from .checkpoints import load_checkpoint
     from .datasets import load_task
+    from .noise import add_noise, NOISES, require_unseen_rows
     from .training import evaluate
 
-    if args.task == shapeworld_training.TASK or args.image_noise or args.text_noise:
+    if args.task == shapeworld_training.TASK or args.image_noise:
         return shapeworld_training.cmd_eval(args)
+    if args.cache is not None:
+        raise ValueError('--cache is for --task shapeworld')
 
     data = load_task(args.task, args.split, args.data)
     loaded = load_checkpoint(args.checkpoint, expect_entities=data.entities)
+    noise = {name: getattr(args, name.replace('-', '_')) for name in NOISES}
+    if noise['obs-noise']:
+        require_unseen_rows(loaded.model, loaded.name)
+    for name, k in noise.items():
+        data = add_noise(data, loaded.vocab, name, k, args.seed)
     metrics = {
         'checkpoint': str(args.checkpoint),
         'model': loaded.name,
         'task': args.task,
         'split': args.split,
+        **({'noise': noise, 'seed': args.seed} if any(noise.values()) else {}),
         **evaluate(loaded.model, loaded.vocab, data),
     }
     if args.json:
@@ -135,6 +144,7 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     from . import shapeworld_training
     from .models import MODELS
+    from .noise import add_noise_options
     from .shapeworld_models import MODELS as SHAPEWORLD_MODELS
 
     tasks = [*TASKS, shapeworld_training.TASK]
@@ -202,6 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument('--split', default='test', choices=SPLITS)
     e.add_argument('--data', default=DEFAULT_DATA)
     e.add_argument('--json', action='store_true', help='print exactly one JSON object')
+    add_noise_options(e)
     e.set_defaults(func=cmd_eval)
     shapeworld_training.add_cli_options(t, e)
 
@@ -284,16 +295,18 @@ def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, bags, the suite, and the closed-loop demo, which needs rclpy (without it, every other
-    subcommand still works).
+    bench, bags, the suite, robustness, explain, and the closed-loop demo, which needs rclpy
+    (without it, every other subcommand still works).
     """
-    from . import bags, bench, shapeworld_training, suite
+    from . import bags, bench, explain, robustness, shapeworld_training, suite
 
     found = [
         bench.register_cli,
         bags.register_cli,
         suite.register_cli,
         shapeworld_training.register_cli,
+        robustness.register_cli,
+        explain.register_cli,
     ]
     try:
         from .ros import demo

@@ -64,9 +64,11 @@ class ModelConfig:
     # G1, G2 rise by 1 every this many cells (0: span -1..1 whatever the size)
     gradient_cells: float = 0.0
     axial: bool = False  # the head's first layer also sees map-wide row/column maxima
+    # entity kinds held out of training (the robustness study's unseen objects), see EntityEncoder
+    unseen_kinds: int = 10
 
     # fields added after checkpoints were shipped, with the value those checkpoints had
-    LATER_FIELDS = {'gradient_cells': 0.0, 'axial': False}
+    LATER_FIELDS = {'gradient_cells': 0.0, 'axial': False, 'unseen_kinds': 0}
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -109,18 +111,51 @@ class TextEncoder(nn.Module):
         return words, mask, mean
 
 
+# Seed of the unseen kinds' embedding rows: the same rows in every model and every checkpoint.
+UNSEEN_ROWS_SEED = 1010
+
+
+def unseen_kind_ids(n_entities: int, count: int) -> list[int]:
+    """Grid values of the first `count` unseen kinds: after the kinds and the off-map row."""
+    return list(range(n_entities + 1, n_entities + 1 + count))
+
+
 class EntityEncoder(nn.Module):
     """
     phi.
 
     An embedding per entity index, plus one learned 'off the map' entity that pads the border so
     edge cells have a full neighbourhood too.
+
+    Rows n+1 .. n+U are `cfg.unseen_kinds` kinds that no training map holds (the robustness
+    study's unseen objects, `unseen_kind_ids`): training never touches them (an embedding row
+    that is never looked up gets no gradient, and Adam leaves it where it was), so they stay
+    at nn.Embedding's own initial distribution, N(0, 1), drawn from a generator of their own
+    (UNSEEN_ROWS_SEED). Their own generator keeps the global random stream, and with it the
+    initialisation of everything else, as it was before these rows existed.
     """
 
     def __init__(self, cfg: ModelConfig, pad: int = 1):
         super().__init__()
         self.off_map, self.pad = cfg.n_entities, pad
         self.embed = nn.Embedding(cfg.n_entities + 1, cfg.embed_dim)
+        unseen = torch.randn(
+            cfg.unseen_kinds,
+            cfg.embed_dim,
+            generator=torch.Generator().manual_seed(UNSEEN_ROWS_SEED),
+        )
+        self.embed.weight = nn.Parameter(torch.cat([self.embed.weight.data, unseen]))
+        self.embed.num_embeddings += cfg.unseen_kinds
+
+    def with_unseen_rows(self, weight: torch.Tensor) -> torch.Tensor:
+        """
+        Complete a saved embedding `weight` that lacks some unseen rows with this encoder's.
+
+        Checkpoints written before the unseen rows existed hold n+1 rows; they get the same
+        deterministic rows a model trained with them has, so every checkpoint sees the same
+        unseen objects.
+        """
+        return torch.cat([weight, self.embed.weight.data[len(weight):]])
 
     def pad_grid(self, grids: torch.Tensor) -> torch.Tensor:
         """(B,H,W) -> (B,H+2p,W+2p) entity indices, the border off the map."""
@@ -477,7 +512,7 @@ class TRNet(nn.Module):
         relations = code['relations'].expand(b, -1, -1)  # (B, Ki * Kj, 8)
         # each entity kind's table row as a centre (i * Kj) and as a neighbour (j); -1: absent
         n_kinds_j = len(kinds) + 1
-        row_i = torch.full((self.cfg.n_entities + 1,), -1, device=grids.device)
+        row_i = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
         row_i[kinds] = torch.arange(len(kinds), device=grids.device)
         row_j = row_i.clone()
         row_j[self.phi.off_map] = len(kinds)

@@ -219,7 +219,7 @@ GRID_ONLY_OPTIONS = (
 
 
 def add_cli_options(train_parser, eval_parser) -> None:
-    """Add the options `train` and `eval` take for --task shapeworld."""
+    """Add the options of --task shapeworld (the noise options: noise.add_noise_options)."""
     for p in (train_parser, eval_parser):
         p.add_argument(
             '--cache',
@@ -234,14 +234,6 @@ def add_cli_options(train_parser, eval_parser) -> None:
         metavar='K',
         help='ShapeWorld: K patches of N(0, 1) pixels in each image, clear of the objects',
     )
-    eval_parser.add_argument(
-        '--text-noise',
-        type=int,
-        default=0,
-        metavar='K',
-        help='ShapeWorld: K random words inserted at one random position of each statement',
-    )
-    eval_parser.add_argument('--seed', type=int, default=0, help='seed of the noise')
 
 
 def cmd_train(args) -> int:
@@ -263,7 +255,10 @@ def cmd_train(args) -> int:
 
 def cmd_eval(args) -> int:
     if args.task != TASK:
-        raise ValueError(f'--image-noise and --text-noise are options of --task {TASK}')
+        raise ValueError(f'--image-noise is an option of --task {TASK}')
+    if args.obs_noise or args.unknown_words:
+        raise ValueError(f'--task {TASK} takes --image-noise and --text-noise, not --obs-noise '
+                         'or --unknown-words')
     if args.image_noise < 0 or args.text_noise < 0:
         raise ValueError('--image-noise and --text-noise count patches and words: 0 or more')
     model, vocab, header = load(args.checkpoint)

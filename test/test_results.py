@@ -133,6 +133,7 @@ def readme_section(heading: str) -> str:
         ('Results: clear references', 'ablation.md'),
         ('Benchmarks', 'bench.md'),
         ('Results: ShapeWorld', 'shapeworld.md'),
+        ('Results: robustness', 'robustness.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):
@@ -277,3 +278,11 @@ def test_shipped_shapeworld_checkpoint_evaluates_to_its_row(run, tmp_path_factor
     got = json.loads(capsys.readouterr().out)
     assert got['model'] == run['model'] and got['n'] == run['test']['n']
     assert got['acc'] == pytest.approx(run['test']['acc'], abs=2 / run['test']['n'])
+
+
+def test_robustness_table_is_the_json():
+    """results/robustness.md is what robustness.markdown_table makes of robustness.json."""
+    from spatial_grounding_ros.robustness import robustness_markdown
+
+    study = json.loads((RESULTS / 'robustness.json').read_text())
+    assert (RESULTS / 'robustness.md').read_text() == robustness_markdown(study)

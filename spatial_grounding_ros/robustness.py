@@ -1,0 +1,255 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The robustness study (paper section 5.3, Figure 5): how much worse under noise.
+
+Each checkpoint is evaluated on a task's clean test set and at every k of each noise
+(noise.py); md_rel = MD / clean MD - 1 is the paper's curve.
+
+    spatial-grounding robustness --task pw-local --checkpoints pw-local_t-rnet-attn \
+        pw-local_t-cnn --ks 0 1 2 5 10 --json --out results
+    spatial-grounding reproduce-robustness --out results    # make reproduce-robustness
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+import sys
+
+from tqdm import tqdm
+
+from .checkpoints import load_checkpoint, PACKAGED_DIR, resolve_checkpoint
+from .datasets import DEFAULT_DATA, load_task
+from .noise import add_noise, MAX_K, noise_count, NOISES, require_unseen_rows
+from .plots import plot_robustness
+from .training import evaluate
+
+STUDY_TASKS = ('pw-local', 'pw-global', 'isi')
+DEFAULT_KS = (0, 1, 2, 5, 10)
+STUDY_MODELS = ('t-rnet-attn', 't-rnet', 't-cnn')
+# The issue's minimum: at k = 10 unseen objects on PW local and global, t-RNetAttn's MD rises by
+# at most 30% (the paper's figure) and by less than t-CNN's.
+MINIMUM_TASKS, MINIMUM_RISE = ('pw-local', 'pw-global'), 0.30
+
+
+def check_ks(ks) -> list[int]:
+    """Return the amounts of noise, sorted, with 0 (the clean reference) always among them."""
+    bad = [k for k in ks if not 0 <= k <= MAX_K]
+    if bad:
+        raise ValueError(f'--ks must lie in 0..{MAX_K}, got {bad}')
+    return sorted({0, *ks})
+
+
+def study(
+    task: str,
+    checkpoints: list[str],
+    ks=DEFAULT_KS,
+    seed: int = 0,
+    data_dir: str | Path = DEFAULT_DATA,
+    progress: bool = True,
+) -> list[dict]:
+    """Return one row per checkpoint, noise and k: MSE, PQ, MD, HIT and MD's relative change."""
+    if task not in STUDY_TASKS:
+        raise ValueError(f'the robustness study runs on {", ".join(STUDY_TASKS)}, not {task!r}')
+    if not checkpoints:
+        raise ValueError('give at least one checkpoint')
+    ks = check_ks(ks)
+    test = load_task(task, 'test', data_dir)
+    loaded = [load_checkpoint(c, expect_entities=test.entities) for c in checkpoints]
+    for model in loaded:
+        require_unseen_rows(model.model, model.name)
+    bar = tqdm(
+        total=len(loaded) * (1 + len(NOISES) * (len(ks) - 1)),
+        desc=f'robustness {task}',
+        disable=not progress,
+    )
+    rows = []
+    for checkpoint, model in zip(checkpoints, loaded):
+        clean = evaluate(model.model, model.vocab, test)
+        bar.update()
+        for noise in NOISES:
+            for k in ks:
+                metrics = clean
+                if k:
+                    noisy = add_noise(test, model.vocab, noise, k, seed)
+                    metrics = evaluate(model.model, model.vocab, noisy)
+                    bar.update()
+                rows.append(
+                    {
+                        'task': task,
+                        'checkpoint': resolve_checkpoint(checkpoint).name,
+                        'model': model.name,
+                        'noise': noise,
+                        'k': k,
+                        **{key: metrics[key] for key in ('mse', 'pq', 'md', 'hit', 'n')},
+                        # relative to a clean MD of 0 (every goal hit) is undefined: None
+                        'md_rel': metrics['md'] / clean['md'] - 1 if clean['md'] else None,
+                        'pq_rel': metrics['pq'] / clean['pq'] - 1,
+                    }
+                )
+    bar.close()
+    return rows
+
+
+def minimum_verdict(rows: list[dict]) -> str | None:
+    """
+    Say whether the issue's minimum holds, from the rows (None: the rows cannot tell).
+
+    At k = 10 unseen objects on PW local and global, t-RNetAttn's MD rises by at most 30%
+    and by less than t-CNN's.
+    """
+    rise = {
+        (r['task'], r['model']): r['md_rel']
+        for r in rows
+        if r['noise'] == 'obs-noise' and r['k'] == MAX_K
+    }
+    parts, holds = [], True
+    for task in MINIMUM_TASKS:
+        if (task, 't-rnet-attn') not in rise or (task, 't-cnn') not in rise:
+            return None
+        attn, cnn = rise[task, 't-rnet-attn'], rise[task, 't-cnn']
+        ok = attn is not None and cnn is not None and attn <= MINIMUM_RISE and attn < cnn
+        holds &= ok
+        parts.append(
+            f'{task}: t-rnet-attn {_percent(attn)}, t-cnn {_percent(cnn)} '
+            f'({"met" if ok else "not met"})'
+        )
+    verdict = 'holds' if holds else 'does not hold'
+    return (
+        f'Minimum (k = {MAX_K} unseen objects: t-rnet-attn MD rises by at most '
+        f'{MINIMUM_RISE:.0%} and by less than t-cnn): {verdict}. ' + '; '.join(parts) + '.'
+    )
+
+
+def _percent(x: float | None) -> str:
+    return '-' if x is None else f'{x:+.0%}'
+
+
+def markdown_table(rows: list[dict], seed: int) -> str:
+    """One line per task, model and noise: clean MD and HIT, then MD's change at each k."""
+    ks = sorted({r['k'] for r in rows} - {0})
+    lines = [
+        '| task | model | noise | clean MD | clean HIT | '
+        + ' | '.join(f'MD k={k}' for k in ks)
+        + ' |',
+        '| --- | --- | --- | --- | --- | ' + ' | '.join('---' for _ in ks) + ' |',
+    ]
+    for r in rows:
+        if r['k']:
+            continue
+        same = [
+            x for x in rows
+            if (x['task'], x['checkpoint'], x['noise']) == (r['task'], r['checkpoint'], r['noise'])
+        ]
+        change = {x['k']: x for x in same}
+        cells = [f'{change[k]["md"]:.2f} ({_percent(change[k]["md_rel"])})' for k in ks]
+        lines.append(
+            f'| {r["task"]} | {r["model"]} | {r["noise"]} | {r["md"]:.2f} | {r["hit"]:.3f} | '
+            + ' | '.join(cells)
+            + ' |'
+        )
+    caption = [
+        f'MD at each amount k of noise (its change against the clean test set), seed {seed}.'
+    ]
+    verdict = minimum_verdict(rows)
+    if verdict:
+        caption.append(verdict)
+    return '\n'.join(lines) + '\n\n' + '\n\n'.join(caption) + '\n'
+
+
+def reproduce_robustness(
+    data_dir: str | Path,
+    out: str | Path,
+    tasks=STUDY_TASKS,
+    models=STUDY_MODELS,
+    ks=DEFAULT_KS,
+    seed: int = 0,
+) -> dict:
+    """
+    Run the study on the shipped checkpoints `<task>_<model>` of every task.
+
+    Writes robustness.json, robustness.md and robustness.png to `out`. A model without a
+    shipped checkpoint for a task is listed under "missing", not silently left out.
+    """
+    out = Path(out)
+    rows, missing = [], []
+    for task in tasks:
+        names = [f'{task}_{m}' for m in models]
+        missing += [n for n in names if not (PACKAGED_DIR / f'{n}.pt').is_file()]
+        found = [n for n in names if n not in missing]
+        if found:
+            rows += study(task, found, ks, seed, data_dir)
+    if missing:
+        print(f'robustness: no shipped checkpoint for {", ".join(missing)}', file=sys.stderr)
+    result = {'seed': seed, 'ks': check_ks(ks), 'missing': missing, 'results': rows}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / 'robustness.json').write_text(json.dumps(result, indent=1) + '\n')
+    (out / 'robustness.md').write_text(robustness_markdown(result))
+    plot_robustness(rows, out / 'robustness.png')
+    return result
+
+
+def robustness_markdown(result: dict) -> str:
+    """Return results/robustness.md: the table, and the checkpoints the study lacked."""
+    table = markdown_table(result['results'], result['seed'])
+    if result['missing']:
+        table += f'\nNo shipped checkpoint (not in the study): {", ".join(result["missing"])}.\n'
+    return table
+
+
+def cmd_robustness(args) -> int:
+    rows = study(args.task, args.checkpoints, args.ks, args.seed, args.data, not args.quiet)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f'robustness_{args.task}.json').write_text(
+        json.dumps({'results': rows}, indent=1) + '\n'
+    )
+    plot_robustness(rows, out / f'robustness_{args.task}.png')
+    if args.json:
+        print(json.dumps({'results': rows}))
+    else:
+        print(markdown_table(rows, args.seed), end='')
+    return 0
+
+
+def cmd_reproduce_robustness(args) -> int:
+    reproduce_robustness(args.data, args.out, args.tasks, args.models, args.ks, args.seed)
+    return 0
+
+
+def register_cli(sub) -> None:
+    p = sub.add_parser(
+        'robustness', help='MD, PQ and HIT under unseen objects, noise words and unknown words'
+    )
+    p.add_argument('--task', required=True, choices=STUDY_TASKS)
+    p.add_argument('--checkpoints', required=True, nargs='+', metavar='CHECKPOINT')
+    _add_common(p)
+    p.add_argument('--out', default='.', help='folder for robustness_<task>.json and .png')
+    p.add_argument('--json', action='store_true', help='print exactly one JSON object')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=cmd_robustness)
+
+    r = sub.add_parser(
+        'reproduce-robustness',
+        help='the robustness study on the shipped checkpoints: robustness.json, .md and .png',
+    )
+    r.add_argument('--tasks', nargs='+', default=list(STUDY_TASKS), choices=STUDY_TASKS)
+    r.add_argument('--models', nargs='+', default=list(STUDY_MODELS))
+    _add_common(r)
+    r.add_argument('--out', default='results')
+    r.set_defaults(func=cmd_reproduce_robustness)
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        '--ks', nargs='+', type=noise_count, default=list(DEFAULT_KS),
+        help='amounts of each noise (0, the clean test set, is always evaluated)',
+    )
+    p.add_argument('--seed', type=int, default=0, help='seed of the noise')
+    p.add_argument('--data', default=DEFAULT_DATA)
