@@ -165,6 +165,7 @@ ABLATIONS = (
     ('MSE only (no goal cross-entropy)', {'goal_weight': 0.0}, {}),
     ('learned goal temperature', {'learn_goal_scale': True}, {}),
     ('gradient maps in cells (1 per 4.5)', {}, {'gradient_cells': 4.5}),
+    ('no axial views in the head', {}, {'axial': False}),
     ('no world-pickle instructions', {'world_instructions': False}, {}),
     ('no generated worlds', {'synthetic': 0}, {}),
 )
