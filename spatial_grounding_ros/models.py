@@ -249,21 +249,24 @@ class OutputHead(nn.Module):
         # maps of more than tile x tile cells run in tiles of that side (memory: see forward)
         self.tile = 256
 
-    def forward(self, z1: torch.Tensor, beta: torch.Tensor) -> torch.Tensor:
+    def forward(self, z1: torch.Tensor, beta: torch.Tensor, layout=None) -> torch.Tensor:
+        """Value maps (B, H, W); `layout`: a torch.memory_format, or None to choose (convolve)."""
         h, w = z1.shape[1:]
         z2 = torch.einsum('bc,chw->bhw', beta, gradient_maps(h, w, z1.device, self.gradient_cells))
         x = torch.stack([z1, z2], dim=1)
         if not self.axial:
-            return self.tiled(x, first=0)
+            return self.tiled(x, first=0, layout=layout)
         # the views are map-wide: the first layer runs on the whole map (8 channels a cell)
-        x = self.convolve(x, first=0, last=1)
-        return self.tiled(x, first=1, views=AxialViews(x))
+        x = self.convolve(x, first=0, last=1, layout=layout)
+        return self.tiled(x, first=1, views=AxialViews(x), layout=layout)
 
-    def tiled(self, x: torch.Tensor, first: int, views: AxialViews | None = None) -> torch.Tensor:
+    def tiled(
+        self, x: torch.Tensor, first: int, views: AxialViews | None = None, layout=None
+    ) -> torch.Tensor:
         """Run layers first.. on x (B, C, H, W), in tiles when the map is large."""
         b, _, h, w = x.shape
         if h * w <= self.tile * self.tile:
-            return self.convolve(x, first, views=views, window=(0, h, 0, w))
+            return self.convolve(x, first, views=views, window=(0, h, 0, w), layout=layout)
         # Large maps go through in tiles, so the 8..32-channel activations exist for one tile
         # at a time. Each 3x3 convolution reaches one cell further, so a tile read with a halo
         # of one cell per layer has exact values everywhere inside it: the zero padding at the
@@ -276,8 +279,9 @@ class OutputHead(nn.Module):
                 bottom, right = min(top + t, h), min(left + t, w)
                 r0, c0 = max(top - halo, 0), max(left - halo, 0)
                 r1, c1 = min(bottom + halo, h), min(right + halo, w)
+                window = (r0, r1, c0, c1)
                 tile = self.convolve(
-                    x[:, :, r0:r1, c0:c1], first, views=views, window=(r0, r1, c0, c1)
+                    x[:, :, r0:r1, c0:c1], first, views=views, window=window, layout=layout
                 )
                 values[:, top:bottom, left:right] = tile[
                     :, top - r0:bottom - r0, left - c0:right - c0
