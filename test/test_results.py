@@ -117,11 +117,14 @@ def tables(text: str) -> list[list[list[str]]]:
 
 
 def readme_section(heading: str) -> str:
-    """Return the README's text from `## heading` to the next `## `."""
-    text = (REPO / 'README.md').read_text()
-    start = text.index(f'\n## {heading}\n')
-    end = text.find('\n## ', start + 1)
-    return text[start:end if end > 0 else None]
+    """Return the text from `## heading` to the next `## `, in the README or a docs/ page."""
+    for page in [REPO / 'README.md', *sorted((REPO / 'docs').glob('*.md'))]:
+        text = page.read_text()
+        start = text.find(f'\n## {heading}\n')
+        if start >= 0:
+            end = text.find('\n## ', start + 1)
+            return text[start:end if end > 0 else None]
+    raise AssertionError(f'no section "## {heading}" in the README or docs/')
 
 
 @pytest.mark.parametrize(
