@@ -63,7 +63,7 @@ class ModelConfig:
     head_slope: float = 0.01  # negative slope of the head's ReLUs (0: plain ReLU)
     # G1, G2 rise by 1 every this many cells (0: span -1..1 whatever the size)
     gradient_cells: float = 0.0
-    axial: bool = False  # the head's first layer also sees map-wide row/column maxima
+    axial: bool = False  # the head's second layer also reads map-wide row/column maxima
     # entity kinds held out of training (the robustness study's unseen objects), see EntityEncoder
     unseen_kinds: int = 10
 

@@ -28,9 +28,8 @@ from rclpy.node import Node
 from std_msgs.msg import Header, String
 
 from . import convert
-from .demo import executable
-from .grounder_node import LATCHED
-from .node_support import stop_processes
+from .processes import executable, stop_processes
+from .qos import LATCHED
 
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
 # run, that share a ROS_DOMAIN_ID never answer each other's requests

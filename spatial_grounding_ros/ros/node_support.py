@@ -37,7 +37,6 @@ from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from std_msgs.msg import Header
 
-from .processes import stop_processes  # noqa: F401 (ros/bench_ros.py imports it from here)
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
