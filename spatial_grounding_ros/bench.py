@@ -143,7 +143,7 @@ def size_latency(grounder: Grounder, size: int, args, reference_s_per_cell: floa
     tokens = torch.as_tensor(grounder.vocab.encode_batch([text]))
     model = grounder.model
     z1 = torch.randn(1, size, size)
-    beta = torch.randn(1, 3)
+    code = torch.randn(1, model.head.code_size)  # what an instruction gives the head
 
     def new_instruction():
         grounder.text_codes.clear()
@@ -154,9 +154,9 @@ def size_latency(grounder: Grounder, size: int, args, reference_s_per_cell: floa
 
     row = {'map': f'{size}x{size}', 'instruction': text}
     # the output network alone: as the model runs it (channels-last, tiled), and plain
-    row['head'] = run(lambda: model.head(z1, beta), 'head')
+    row['head'] = run(lambda: model.head(z1, code), 'head')
     row['head_plain'] = run(
-        lambda: model.head(z1, beta, layout=torch.contiguous_format), 'plain head'
+        lambda: model.head(z1, code, layout=torch.contiguous_format), 'plain head'
     )
     reset_peak_rss()
     row['ground_cached'] = run(lambda: grounder.ground(grid, text), 'ground, cached')

@@ -64,11 +64,24 @@ class ModelConfig:
     # G1, G2 rise by 1 every this many cells (0: span -1..1 whatever the size)
     gradient_cells: float = 0.0
     axial: bool = False  # the head's second layer also reads map-wide row/column maxima
+    # a second relation map: each cell against every cell within FAR_REACH, its score the
+    # relation MLP's at a 'far' position code minus a learned cost per squared cell of
+    # distance ("the tree closest to the star")
+    far: bool = False
+    # the instruction scales and shifts the head's first-layer channels (FiLM): the output
+    # network knows which geometry the instruction asks for
+    head_text: bool = False
     # entity kinds held out of training (the robustness study's unseen objects), see EntityEncoder
     unseen_kinds: int = 10
 
     # fields added after checkpoints were shipped, with the value those checkpoints had
-    LATER_FIELDS = {'gradient_cells': 0.0, 'axial': False, 'unseen_kinds': 0}
+    LATER_FIELDS = {
+        'gradient_cells': 0.0,
+        'axial': False,
+        'unseen_kinds': 0,
+        'head_text': False,
+        'far': False,
+    }
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -84,14 +97,20 @@ class ModelConfig:
         return cls(**{**d, 'mlp': tuple(d['mlp']), 'head': tuple(d['head'])})
 
 
+def head_code_size(cfg: ModelConfig) -> int:
+    """What the instruction gives the output network: 3 gradient coefficients, and with
+    head_text a scale and a shift per first-layer channel."""
+    return 3 + (2 * cfg.head[0] if cfg.head_text and cfg.head else 0)
+
+
 def relation_param_count(cfg: ModelConfig) -> int:
     """
-    Size of h: weights of f (no biases, as the paper counts) plus 3 gradient coefficients.
+    Size of h: weights of f (no biases, as the paper counts) plus the head's code.
 
-    (2k+1)*10 + 10*10 + 10*1 + 3 = 263 for k = 7, 383 for k = 13.
+    (2k+1)*10 + 10*10 + 10*1 + 3 = 263 for k = 7, 383 for k = 13 (without head_text).
     """
     sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
-    return sum(a * b for a, b in zip(sizes[:-1], sizes[1:])) + 3
+    return sum(a * b for a, b in zip(sizes[:-1], sizes[1:])) + head_code_size(cfg)
 
 
 class TextEncoder(nn.Module):
@@ -226,6 +245,8 @@ class OutputHead(nn.Module):
 
     `axial`: the second layer also reads AxialViews of the first layer's channels, so the
     head can compare what lies anywhere along a row or column, not only within 6 cells.
+    `film`: the code's entries after beta scale and shift the first layer's channels.
+    `inputs`: 3 when t-RNet's far relation map joins Z1 and Z2.
     """
 
     def __init__(
@@ -234,10 +255,13 @@ class OutputHead(nn.Module):
         slope: float = 0.0,
         gradient_cells: float = 0.0,
         axial: bool = False,
+        film: bool = False,
+        inputs: int = 2,
     ):
         super().__init__()
-        self.gradient_cells, self.axial = gradient_cells, axial and len(channels) > 0
-        sizes = [2, *channels, 1]
+        self.gradient_cells = gradient_cells
+        self.axial, self.film = axial and len(channels) > 0, film and len(channels) > 0
+        sizes = [inputs, *channels, 1]
         # with axial views the second layer also reads AXIAL_VIEWS maps per channel of the first
         self.convs = nn.ModuleList(
             nn.Conv2d(a * (1 + AXIAL_VIEWS if self.axial and n == 1 else 1), b, 3, padding=1)
@@ -249,31 +273,51 @@ class OutputHead(nn.Module):
         # maps of more than tile x tile cells run in tiles of that side (memory: see forward)
         self.tile = 256
 
-    def forward(self, z1: torch.Tensor, beta: torch.Tensor, layout=None) -> torch.Tensor:
-        """Value maps (B, H, W); `layout`: a torch.memory_format, or None to choose (convolve)."""
+    @property
+    def code_size(self) -> int:
+        """Entries of the instruction's code this head reads: beta, then the FiLM's."""
+        return 3 + (2 * self.convs[0].out_channels if self.film else 0)
+
+    def forward(
+        self, z1: torch.Tensor, code: torch.Tensor, far: torch.Tensor | None = None, layout=None
+    ) -> torch.Tensor:
+        """
+        Value maps (B, H, W) from Z1 (B, H, W) and the instruction's code (B, code_size).
+
+        `far`: t-RNet's far relation map (B, H, W), a third input map. `layout`: a
+        torch.memory_format, or None to choose (convolve).
+        """
         h, w = z1.shape[1:]
+        beta, film = code[:, :3], code[:, 3:] if self.film else None
         z2 = torch.einsum('bc,chw->bhw', beta, gradient_maps(h, w, z1.device, self.gradient_cells))
-        x = torch.stack([z1, z2], dim=1)
-        if not self.axial:
+        x = torch.stack([z1, z2] if far is None else [z1, z2, far], dim=1)
+        if not (self.axial or self.film):
             return self.tiled(x, first=0, layout=layout)
         # the views are map-wide: the first layer runs on the whole map (8 channels a cell)
-        x = self.convolve(x, first=0, last=1, layout=layout)
-        return self.tiled(x, first=1, views=AxialViews(x), layout=layout)
+        x = self.convolve(x, first=0, last=1, film=film, layout=layout)
+        views = {1: [AxialViews(x)]} if self.axial else None
+        return self.tiled(x, first=1, views=views, layout=layout)
 
     def tiled(
-        self, x: torch.Tensor, first: int, views: AxialViews | None = None, layout=None
+        self,
+        x: torch.Tensor,
+        first: int,
+        last: int | None = None,
+        views: dict | None = None,
+        layout=None,
     ) -> torch.Tensor:
-        """Run layers first.. on x (B, C, H, W), in tiles when the map is large."""
+        """Run layers first..last-1 on x (B, C, H, W), in tiles when the map is large."""
+        last = len(self.convs) if last is None else last
         b, _, h, w = x.shape
         if h * w <= self.tile * self.tile:
-            return self.convolve(x, first, views=views, window=(0, h, 0, w), layout=layout)
+            return self.convolve(x, first, last, views, window=(0, h, 0, w), layout=layout)
         # Large maps go through in tiles, so the 8..32-channel activations exist for one tile
         # at a time. Each 3x3 convolution reaches one cell further, so a tile read with a halo
         # of one cell per layer has exact values everywhere inside it: the zero padding at the
         # halo's cut edges only reaches into the halo. At the map's own edges the tile is cut
         # where the map ends, so the padding there is the untiled padding.
-        halo, t = len(self.convs) - first, self.tile
-        values = x.new_empty(b, h, w)
+        halo, t = last - first, self.tile
+        out = None
         for top in range(0, h, t):
             for left in range(0, w, t):
                 bottom, right = min(top + t, h), min(left + t, w)
@@ -281,27 +325,31 @@ class OutputHead(nn.Module):
                 r1, c1 = min(bottom + halo, h), min(right + halo, w)
                 window = (r0, r1, c0, c1)
                 tile = self.convolve(
-                    x[:, :, r0:r1, c0:c1], first, views=views, window=window, layout=layout
+                    x[:, :, r0:r1, c0:c1], first, last, views, window=window, layout=layout
                 )
-                values[:, top:bottom, left:right] = tile[
-                    :, top - r0:bottom - r0, left - c0:right - c0
+                if out is None:  # (B, H, W) values, or (B, C, H, W) activations
+                    out = tile.new_empty(*tile.shape[:-2], h, w)
+                out[..., top:bottom, left:right] = tile[
+                    ..., top - r0:bottom - r0, left - c0:right - c0
                 ]
-        return values
+        return out
 
     def convolve(
         self,
         x: torch.Tensor,
         first: int = 0,
         last: int | None = None,
-        views: AxialViews | None = None,
+        views: dict | None = None,
         window: tuple[int, int, int, int] | None = None,
+        film: torch.Tensor | None = None,
         layout=None,
     ) -> torch.Tensor:
         """
         Run layers first..last-1 on x (B, C, H, W).
 
-        Through the last layer: (B, H, W) values; else the activations. `views` of the whole
-        map join the second layer's input, cut to `window` (top, bottom, left, right) of x.
+        Through the last layer: (B, H, W) values; else the activations. `views`
+        ({layer: [views]}) of the whole map join that layer's input, cut to `window` (top,
+        bottom, left, right) of x. `film` (B, 2C): the first layer's scale and shift.
         """
         last = len(self.convs) if last is None else last
         if layout is None:
@@ -312,9 +360,12 @@ class OutputHead(nn.Module):
             layout = torch.channels_last if big else torch.contiguous_format
         x = x.contiguous(memory_format=layout)
         for n in range(first, last):
-            if n == 1 and views is not None:
-                x = torch.cat([x, views.window(*window)], 1)
+            if views and views.get(n):
+                x = torch.cat([x, *(v.window(*window) for v in views[n])], 1)
             x = self.convs[n](x)
+            if n == 0 and film is not None:
+                scale, shift = film.chunk(2, dim=1)
+                x = x * (1 + scale[..., None, None]) + shift[..., None, None]
             if n < len(self.convs) - 1:
                 x = F.leaky_relu(x, self.slope, inplace=True)  # the conv's own output
         return x[:, 0] if last == len(self.convs) else x
@@ -355,6 +406,43 @@ class AxialViews:
 
 
 AXIAL_VIEWS = 6
+# The far relation: its position code (the 8 offsets' codes are -1, -5/7, ..., 1), the log of
+# its first cost per squared cell of distance, and its reach in rows and columns (a 10x10 map
+# whole, a robot map's neighbourhood)
+FAR_POSITION, FAR_LOG_COST, FAR_REACH = 0.0, -3.0, 12
+
+
+def distance_max(x: torch.Tensor, cost, reach: int = FAR_REACH) -> torch.Tensor:
+    """
+    Max over cells j within `reach` rows and columns of x(j) - cost * |i - j|^2, per
+    channel of x (B, C, H, W); `cost` broadcasts against (C, H, W).
+
+    A max-plus distance transform. The squared distance splits into rows and columns, so it
+    runs as two passes over 2R+1 shifts, O(HWR).
+    """
+    limit = reach
+    for dim in (2, 3):
+        n, reach = x.shape[dim], min(limit, x.shape[dim] - 1)
+        pad = [0, 0, 0, 0]
+        pad[(3 - dim) * 2:(3 - dim) * 2 + 2] = [reach, reach]
+        padded = F.pad(x, pad, value=float('-inf'))
+        out = x
+        for d in range(-reach, reach + 1):
+            if d:
+                out = torch.maximum(out, padded.narrow(dim, reach + d, n) - cost * d * d)
+        x = out
+    return x
+
+
+def build_head(cfg: ModelConfig) -> OutputHead:
+    return OutputHead(
+        cfg.head,
+        cfg.head_slope,
+        cfg.gradient_cells,
+        cfg.axial,
+        cfg.head_text,
+        inputs=3 if cfg.far else 2,
+    )
 
 
 class TRNet(nn.Module):
@@ -385,9 +473,11 @@ class TRNet(nn.Module):
             self.attn = nn.Linear(cfg.hidden, 2 * cfg.embed_dim, bias=False)
             nn.init.zeros_(self.attn.weight)
         self.attention_on = attention  # training may switch it off while attn is still 0
-        self.head = OutputHead(cfg.head, cfg.head_slope, cfg.gradient_cells, cfg.axial)
+        self.head = build_head(cfg)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
+        if cfg.far:
+            self.far_log_cost = nn.Parameter(torch.tensor(FAR_LOG_COST))
 
     def split_params(self, params: torch.Tensor) -> list[torch.Tensor]:
         """Cut a parameter vector (..., 263) into the relation MLP's weights (..., out, in)."""
@@ -418,12 +508,19 @@ class TRNet(nn.Module):
                 x = torch.tanh(x)
         return x.squeeze(-1)
 
-    def relations(self, phi_i: torch.Tensor, phi_j: torch.Tensor, text: tuple):
+    def relations(
+        self,
+        phi_i: torch.Tensor,
+        phi_j: torch.Tensor,
+        text: tuple,
+        rel: torch.Tensor | None = None,
+    ):
         """
         Score pairs: centres phi_i (B, M, k) against phi_j (B, M, 8, k) at the 8 offsets.
 
         Returns r (B, M, 8) and the attention over words (B, M, 8, L) (None without it). The
         M rows are a map's cells (reference) or a table's kind pairs (fast): the same code.
+        `rel`: position codes (P,) for P columns of phi_j (default: the 8 offsets').
         """
         words, mask, mean = text  # (B, L, 30), (B, L), (B, 30)
         b, m, n_nbrs, k = phi_j.shape
@@ -442,7 +539,9 @@ class TRNet(nn.Module):
             weights = self.split_params(self.decoder(words))  # (B, L, out, in) per layer
         else:
             weights = self.split_params(self.decoder(mean))  # (B, out, in) per layer
-        rel = relative_positions(self.cfg.radius).to(phi_j.device).expand(b, m, -1).unsqueeze(-1)
+        if rel is None:
+            rel = relative_positions(self.cfg.radius)
+        rel = rel.to(phi_j.device).expand(b, m, -1).unsqueeze(-1)
         x = torch.cat([phi_i.unsqueeze(2).expand(-1, -1, n_nbrs, -1), phi_j, rel], -1)
         return self.relation_mlp(weights, x, attention), attention
 
@@ -476,7 +575,11 @@ class TRNet(nn.Module):
         text = self.text(tokens)
         r, attention = self.relations(phi_i, phi_j, text)  # (B, N, 8)
         z1 = r.max(dim=-1).values.view(b, h, w)
-        values = self.head(z1, self.decoder(text[2])[:, -3:])  # beta: the last 3 entries of h
+        far = None
+        if self.cfg.far:  # its score has no offset term: a table over the kinds present
+            kinds = present_kinds(grids, self.cfg.n_entities)
+            far = self.far_map(grids, kinds, self.far_table(text, kinds))
+        values = self.head(z1, self.decoder(text[2])[:, -self.head.code_size:], far)  # h's last
         # how much each word mattered, averaged over all pairs
         word_attention = None if attention is None else attention.mean(dim=(1, 2))
         return outputs(values, z1, word_attention, return_aux)
@@ -487,9 +590,10 @@ class TRNet(nn.Module):
 
         The relation table r over (kind_i, kind_j, offset) as (B, Ki * Kj, 8), row
         i * Kj + j; the attention over words per kind pair (B, Ki * Kj, L), the same at every
-        offset (its score has no offset term), or None; and beta (B, 3). The centre kinds are
-        `kinds` (default: all), the neighbour kinds those and the off-map one: a caller that
-        keeps this per instruction grounds it on any map with a gather and a max.
+        offset (its score has no offset term), or None; and the head's code (B, code_size).
+        The centre kinds are `kinds` (default: all), the neighbour kinds those and the off-map
+        one: a caller that keeps this per instruction grounds it on any map with a gather and a
+        max.
         """
         if kinds is None:
             kinds = torch.arange(self.cfg.n_entities, device=tokens.device)
@@ -506,8 +610,61 @@ class TRNet(nn.Module):
             'kinds': kinds,
             'relations': r,
             'attention': None if attention is None else attention[:, :, 0],
-            'beta': self.decoder(text[2])[:, -3:],
+            'head': self.decoder(text[2])[:, -self.head.code_size:],
+            'far': self.far_table(text, kinds) if self.cfg.far else None,
         }
+
+    def far_table(self, text: tuple, kinds: torch.Tensor) -> torch.Tensor:
+        """The far relation's score of each (kind_i, kind_j) of `kinds`: (B, K, K)."""
+        embed = self.phi.embed.weight
+        b, n = text[0].shape[0], len(kinds)
+        phi_i = embed[kinds].repeat_interleave(n, dim=0)  # (K * K, k)
+        phi_j = embed[kinds].repeat(n, 1)
+        r, _ = self.relations(
+            phi_i.expand(b, -1, -1),
+            phi_j[None, :, None].expand(b, -1, 1, -1),
+            text,
+            rel=torch.tensor([FAR_POSITION]),
+        )
+        return r.view(b, n, n)
+
+    def far_map(self, grids: torch.Tensor, kinds: torch.Tensor, table: torch.Tensor):
+        """
+        The far relation map (B, H, W): max over cells j within FAR_REACH rows and columns of
+        far(kind_i, kind_j) - cost * |i - j|^2.
+
+        A cell's own kind a is at distance 0, so far(a, a) is its floor, and a kind k can raise
+        it only where far(a, k) - cost * d^2 > far(a, a): only such kinds are measured, and
+        only as far as that gain reaches (exact, and a fraction of the work on a large map).
+        Per kind k, distance_max of the kind's cells (0 there, -inf elsewhere) is -cost times
+        the squared distance to the nearest k, to which each cell adds its row of the table.
+        """
+        b, h, w = grids.shape
+        n = len(kinds)
+        row = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
+        row[kinds] = torch.arange(n, device=grids.device)
+        rows = row[grids].flatten(1)  # (B, H*W): each cell's row of the table
+        if rows.min() < 0:
+            missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
+            raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
+        table = table.expand(b, -1, -1)
+        scores = table.gather(1, rows[..., None].expand(-1, -1, n))  # (B, H*W, K)
+        floor = table.diagonal(dim1=1, dim2=2).gather(1, rows)  # far(a, a) per cell
+        cost = self.far_log_cost.exp()
+        present = torch.bincount(rows.flatten(), minlength=n) > 0
+        gain = (table - table.diagonal(dim1=1, dim2=2)[..., None])[:, present]  # (B, A, K)
+        gain = gain.detach().amax(dim=(0, 1))  # per kind k, over the kinds a present
+        useful = ((gain > 0) & present).nonzero().flatten()
+        out = floor.view(b, h, w)
+        if len(useful):
+            reach = int(torch.sqrt(gain[useful].max() / cost.detach()))
+            marks = torch.zeros(b, len(useful), h, w, device=grids.device).masked_fill_(
+                grids[:, None] != kinds[useful][None, :, None, None], float('-inf')
+            )
+            nearest = distance_max(marks, cost, min(reach, FAR_REACH))  # (B, U, H, W)
+            useful_scores = scores[..., useful].transpose(1, 2).reshape(b, -1, h, w)
+            out = torch.maximum(out, (useful_scores + nearest).amax(1))
+        return out
 
     def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
@@ -532,7 +689,8 @@ class TRNet(nn.Module):
         ]  # per offset (B, N): the (kind_i, kind_j) row of each pair
         r = torch.stack([relations[:, :, p].gather(1, row) for p, row in enumerate(rows)], -1)
         z1 = r.max(dim=-1).values.view(b, h, w)
-        values = self.head(z1, code['beta'].expand(b, -1))
+        far = None if code['far'] is None else self.far_map(grids, kinds, code['far'])
+        values = self.head(z1, code['head'].expand(b, -1), far)
         word_attention = None
         if return_aux and code['attention'] is not None:
             # the mean over the map's pairs: each kind pair's attention times its pair count
@@ -556,20 +714,23 @@ class TCNN(nn.Module):
 
     def __init__(self, cfg: ModelConfig):
         super().__init__()
+        if cfg.far:
+            raise ValueError('far relations are a relation network\'s; t-CNN has none')
         self.cfg = cfg
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)
-        self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + 3)  # 66 for k = 7
-        self.head = OutputHead(cfg.head, cfg.head_slope, cfg.gradient_cells, cfg.axial)
+        # a 3x3 kernel per embedding dimension, then the head's code: 66 for k = 7
+        self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + head_code_size(cfg))
+        self.head = build_head(cfg)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         return self.ground(grids, self.text_code(tokens), return_aux)
 
     def text_code(self, tokens: torch.Tensor) -> dict:
-        """All that an instruction contributes: the kernel (B, k, 3, 3) and beta (B, 3)."""
+        """All that an instruction contributes: the kernel (B, k, 3, 3) and the head's code."""
         vec = self.decoder(self.text(tokens)[2])
-        kernels = vec[:, :-3].unflatten(1, (self.cfg.embed_dim, 3, 3))
-        return {'kernels': kernels, 'beta': vec[:, -3:]}
+        kernels = vec[:, :9 * self.cfg.embed_dim].unflatten(1, (self.cfg.embed_dim, 3, 3))
+        return {'kernels': kernels, 'head': vec[:, 9 * self.cfg.embed_dim:]}
 
     def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
@@ -579,7 +740,7 @@ class TCNN(nn.Module):
         kernels = code['kernels'].expand(b, -1, -1, -1).reshape(b, k, 3, 3)
         # one kernel per example: a grouped convolution over the batch
         z1 = F.conv2d(phi.reshape(1, b * k, h + 2, w + 2), kernels, groups=b).view(b, h, w)
-        values = self.head(z1, code['beta'].expand(b, -1))
+        values = self.head(z1, code['head'].expand(b, -1))
         return outputs(values, z1, None, return_aux)
 
 

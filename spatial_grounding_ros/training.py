@@ -62,7 +62,8 @@ _PW = {
     'mirrors': True,
     'attention_warmup': 0.85,
     'goal_weight': 1.0,
-    'model': {'axial': True},  # map-wide row and column views in the head
+    # map-wide row and column views in the head, the far relation, the instruction in the head
+    'model': {'axial': True, 'far': True, 'head_text': True},
 }
 TASK_SETTINGS = {
     'pw-local': dict(_PW, epochs=40),
@@ -82,7 +83,7 @@ EPOCHS = {task: s['epochs'] for task, s in TASK_SETTINGS.items()}
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
 SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
-GENERATOR_MODE = {'pw-local': 'local', 'pw-global': 'global', 'pw': 'mixed'}
+GENERATOR_MODE = {'pw-local': 'local', 'pw-global': 'global', 'pw': 'training'}
 
 
 @dataclass
@@ -260,6 +261,8 @@ def train_supervised(
         }
     )
     model_options = {**settings['model'], **model_options}
+    if model_name not in ('t-rnet-attn', 't-rnet'):  # the far relation is a relation network's
+        model_options.pop('far', None)
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = train_data if train_data is not None else load_task(task, 'train', data_dir)

@@ -83,10 +83,11 @@ def test_table_equals_pairs(name, shape):
 
 
 def test_table_equals_pairs_isi_and_radius_2():
-    """41 kinds with embedding 13 (ISI), and the footnote's 24 neighbours."""
+    """41 kinds with embedding 13 (ISI), the footnote's 24 neighbours, the head's views."""
     for config, n_entities in (
         ({'n_entities': len(ISI), 'embed_dim': ISI.embed_dim}, len(ISI)),
         ({'radius': 2}, 12),
+        ({'axial': True, 'head_text': True, 'far': True}, 12),
     ):
         vocab, grids, tokens = inputs((9, 14), n_entities, seed=3)
         model = random_model('t-rnet-attn', len(vocab), seed=4, **config)
@@ -138,23 +139,32 @@ def test_table_without_a_kind_of_the_grid_is_an_error():
         model.ground(grids, code)
 
 
-@pytest.mark.parametrize('axial', [False, True])
+HEAD_VIEWS = [
+    {},
+    {'axial': True},
+    {'axial': True, 'head_text': True, 'far': True},
+]
+
+
+@pytest.mark.parametrize('views', HEAD_VIEWS, ids=['plain', 'axial', 'far'])
 @pytest.mark.parametrize('shape', [(30, 45), (1, 40), (61, 13), (7, 7)])
-def test_tiled_head_is_the_untiled_head(shape, axial):
+def test_tiled_head_is_the_untiled_head(shape, views):
     """
     Tiles with a halo of one cell per 3x3 convolution: the same numbers, bit for bit.
 
-    With axial views, the views come from the whole map's first layer.
+    With map-wide views, the views come from the whole map's earlier layers.
     """
-    head = random_model('t-rnet-attn', 5, seed=10, axial=axial).head
-    z1, beta = torch.randn(2, *shape), torch.randn(2, 3)
+    head = random_model('t-rnet-attn', 5, seed=10, **views).head
+    z1, code = torch.randn(2, *shape), torch.randn(2, head.code_size)
+    far = torch.randn(2, *shape) if views.get('far') else None
     with torch.no_grad():
-        untiled = head(z1, beta)
+        untiled = head(z1, code, far)
         for tile in (5, 8):
             head.tile = tile
-            assert torch.equal(head(z1, beta), untiled), tile
-        if axial:
+            assert torch.equal(head(z1, code, far), untiled), tile
+        if views:
             return
+        beta = code
         # the halo is what makes it exact: 5x5 tiles convolved on their own differ
         x = torch.stack([z1, torch.einsum('bc,chw->bhw', beta, gradient_maps(*shape))], 1)
         no_halo = torch.cat(

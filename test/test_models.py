@@ -6,6 +6,7 @@
 
 """Models: the paper's sizes, gradient flow into every module, batching, any map size."""
 
+import numpy as np
 import pytest
 from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
@@ -13,6 +14,9 @@ from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
 from spatial_grounding_ros.models import (
     AxialViews,
     build_model,
+    FAR_REACH,
+    head_code_size,
+    present_kinds,
     ModelConfig,
     MODELS,
     relation_param_count,
@@ -113,6 +117,61 @@ def test_axial_head_runs_on_any_map_and_learns_through_the_views(shape):
     assert values.shape == (2, *shape)
     values.sum().backward()
     assert model.head.convs[1].weight.grad[:, 8:].abs().sum() > 0
+
+
+@pytest.mark.parametrize('name', ['t-rnet-attn', 't-rnet'])
+def test_far_relation_and_head_text_learn_and_run_on_any_map(name):
+    cfg = ModelConfig(vocab_size=5, axial=True, far=True, head_text=True)
+    model = build_model(name, cfg)
+    assert head_code_size(cfg) == 3 + 2 * 8 == model.head.code_size
+    assert model.decoder.out_features == 263 + 16
+    assert model.head.convs[0].in_channels == 3 and model.head.convs[1].in_channels == 8 * 7
+    for shape in ((1, 6), (9, 14)):
+        values = model(torch.randint(0, 12, (2, *shape)), torch.tensor([[2, 3, 4], [2, 0, 0]]))
+        assert values.shape == (2, *shape)
+    values.sum().backward()
+    # the instruction's scale and shift of the first layer: the decoder's last rows learn
+    assert model.decoder.weight.grad[-16:].abs().sum() > 0
+
+
+@pytest.mark.parametrize('log_cost', [-1.0, -7.0])
+def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
+    """
+    Brute force: every cell i against every cell j within FAR_REACH rows and columns.
+
+    At cost e^-1 the kinds that can raise a cell's floor reach a few cells; at e^-7 the 13
+    columns of FAR_REACH bound them on a 16-column map.
+    """
+    torch.manual_seed(3)
+    model = build_model('t-rnet', ModelConfig(vocab_size=6, far=True)).eval()
+    grids = torch.randint(0, 12, (2, 5, 16))
+    tokens = torch.tensor([[2, 3, 4], [5, 0, 0]])
+    with torch.no_grad():
+        model.far_log_cost.fill_(log_cost)
+        kinds = present_kinds(grids, 12)
+        table = model.far_table(model.text(tokens), kinds)
+        far = model.far_map(grids, kinds, table)
+    row = {int(k): n for n, k in enumerate(kinds)}
+    cost = float(np.exp(log_cost))
+    for b in range(2):
+        for r, c in np.ndindex(5, 16):
+            want = max(
+                float(table[b, row[int(grids[b, r, c])], row[int(grids[b, rr, cc])]])
+                - cost * ((rr - r) ** 2 + (cc - c) ** 2)
+                for rr, cc in np.ndindex(5, 16)
+                if max(abs(rr - r), abs(cc - c)) <= FAR_REACH
+            )
+            assert float(far[b, r, c]) == pytest.approx(want, abs=1e-5)
+    # the map is a third input of the head, and it learns through it (at a cost low enough
+    # that some cell's maximum is another cell's)
+    model.train()
+    with torch.no_grad():
+        model.far_log_cost.fill_(-5.0)
+    model(grids, tokens).sum().backward()
+    assert model.head.convs[0].weight.grad[:, 2].abs().sum() > 0
+    assert model.far_log_cost.grad != 0
+    with pytest.raises(ValueError, match="t-CNN has none"):
+        build_model('t-cnn', ModelConfig(vocab_size=6, far=True))
 
 
 def test_isi_sizes():
@@ -255,6 +314,6 @@ def test_word_matmuls_equal_per_pair_weights():
         z1 = r.max(-1).values.view(b, h, w)
         torch.testing.assert_close(aux['relation_map'], z1, rtol=1e-4, atol=1e-5)
         torch.testing.assert_close(
-            values, model.head(z1, model.decoder(mean)[:, -3:]), rtol=1e-4, atol=1e-5
+            values, model.head(z1, model.decoder(mean)[:, -model.head.code_size:]), rtol=1e-4, atol=1e-5
         )
         assert z1.std() > 0.01  # not a degenerate map that any computation would match
