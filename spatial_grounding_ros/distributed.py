@@ -66,19 +66,21 @@ def start() -> Group:
     return Group(dist.get_rank(), dist.get_world_size(), owned)
 
 
-def wrap(model: torch.nn.Module, group: Group) -> torch.nn.Module:
+def wrap(model: torch.nn.Module, group: Group, find_unused: bool) -> torch.nn.Module:
     """
     Return the module to train through: DDP over the processes, or the model itself alone.
 
-    find_unused_parameters: during t-RNetAttn's warm-up the attention weights are off and get no
-    gradient. DDP then leaves their .grad unset on every process, as one process does, so Adam
-    skips them (its step count for them starts with the attention, as alone).
+    find_unused: some steps leave parameters without a gradient (t-RNetAttn's attention weights
+    during the warm-up). DDP then leaves their .grad unset on every process, as one process does,
+    so Adam skips them (its step count for them starts with the attention, as alone). Otherwise
+    off: every model uses all its parameters in every forward, and the search costs a pass over
+    the autograd graph each step.
     """
     if group.size == 1:
         return model
     from torch.nn.parallel import DistributedDataParallel
 
-    return DistributedDataParallel(model, find_unused_parameters=True)
+    return DistributedDataParallel(model, find_unused_parameters=find_unused)
 
 
 def shard(idx: np.ndarray, group: Group) -> tuple[np.ndarray, float]:

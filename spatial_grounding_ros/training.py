@@ -279,7 +279,6 @@ def train_supervised(
     )
     model = build_model(model_name, cfg)
     processes = distributed.start()
-    trained = distributed.wrap(model, processes)  # the model itself in one process
     # log of the goal logits' temperature; learned, it lets the cross-entropy ask for the right
     # argmax without pulling the values away from the MSE's (it is not part of the model)
     goal_log_scale = torch.tensor(float(np.log(tc.goal_scale)), requires_grad=tc.learn_goal_scale)
@@ -300,6 +299,8 @@ def train_supervised(
         )
     steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
     warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, 'attention', False) else 0
+    # the model itself in one process; the warm-up leaves the attention weights unused
+    trained = distributed.wrap(model, processes, find_unused=bool(warmup))
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(
         opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final
     )
