@@ -5,11 +5,12 @@
 # https://opensource.org/licenses/MIT.
 
 """
-A tiny t-RNetAttn training on generated worlds, for test_distributed.py.
+A tiny training on generated worlds, for test_distributed.py.
 
 test_distributed.py calls run() in its own process and starts this file under torchrun, which
-runs it in each process: `python distributed_entry.py OUT` trains into OUT (rank 0 writes the
-checkpoint) and writes OUT/rows<rank>.json, the rows of each training forward of that process.
+runs it in each process: `python distributed_entry.py OUT MODEL` trains MODEL into OUT (rank 0
+writes the checkpoint) and writes OUT/rows<rank>.json, the rows of each training forward of that
+process.
 """
 
 import json
@@ -17,11 +18,11 @@ from pathlib import Path
 import sys
 
 from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.models import TRNet
+from spatial_grounding_ros.models import TCNN, TRNet
 from spatial_grounding_ros.training import train_supervised, TrainConfig
 import torch
 
-# 3 epochs, attention off for the first: the attention weights get no gradient, then do.
+# 3 epochs; t-RNetAttn's attention is off for the first: its weights get no gradient, then do.
 # Batches of 15 split 8 + 7 over 2 processes, and 51 generated worlds leave 46 to train on
 # (5 held out for validation): each epoch has a batch of 1, which leaves a process none.
 # The goal cross-entropy's temperature is learned: a tensor outside the model DDP wraps.
@@ -40,12 +41,11 @@ CONFIG = TrainConfig(
     threads=1,
 )
 WORLDS = 51
-MODEL = 't-rnet-attn'
 
 
-def run(out: Path) -> tuple[Path, dict, list[int], dict]:
+def run(out: Path, model: str) -> tuple[Path, dict, list[int], dict]:
     """
-    Train CONFIG into `out`.
+    Train `model` with CONFIG into `out`.
 
     Returns the checkpoint's path, the summary, the rows of each training forward and the
     weights training started from.
@@ -53,7 +53,7 @@ def run(out: Path) -> tuple[Path, dict, list[int], dict]:
     rows, start = [], {}
 
     def count(module, args):
-        if isinstance(module, TRNet) and module.training:
+        if isinstance(module, (TRNet, TCNN)) and module.training:
             if not rows:
                 start.update({k: v.clone() for k, v in module.state_dict().items()})
             rows.append(args[0].shape[0])
@@ -62,7 +62,7 @@ def run(out: Path) -> tuple[Path, dict, list[int], dict]:
     try:
         path, summary = train_supervised(
             'pw-local',
-            MODEL,
+            model,
             '',
             out,
             CONFIG,
@@ -78,6 +78,6 @@ if __name__ == '__main__':
     import os
 
     out = Path(sys.argv[1])
-    _, _, rows, _ = run(out)
+    _, _, rows, _ = run(out, sys.argv[2])
     out.mkdir(parents=True, exist_ok=True)
     (out / f'rows{os.environ["RANK"]}.json').write_text(json.dumps(rows))
