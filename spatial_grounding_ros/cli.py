@@ -22,10 +22,12 @@ from .datasets import DEFAULT_DATA, SPLITS, TASKS
 
 
 def cmd_train(args) -> int:
-    from . import shapeworld_training
+    from . import distributed, shapeworld_training
     from .training import train_supervised, TrainConfig
 
     if args.task == shapeworld_training.TASK:
+        if distributed.world_size() > 1:  # N copies would each train and write the same file
+            raise ValueError('--task shapeworld trains in one process, not under torchrun')
         return shapeworld_training.cmd_train(args)
 
     tc = TrainConfig(
@@ -42,7 +44,8 @@ def cmd_train(args) -> int:
         goal_weight=args.goal_weight,
     )
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
-    print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
+    if distributed.is_main_process():  # under torchrun, one summary, not one per process
+        print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
     return 0
 
 

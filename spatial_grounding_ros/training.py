@@ -25,7 +25,7 @@ import torch
 import torch.nn.functional as F
 from tqdm import tqdm
 
-from . import world
+from . import distributed, world
 from .augment import with_mirrors
 from .checkpoints import save_checkpoint
 from .datasets import (
@@ -248,6 +248,9 @@ def train_supervised(
 
     Train `model_name` on `task`, keep the epoch with the best validation score, write
     `out/<task>_<model>.pt`; returns its path and a summary.
+
+    Under `torchrun --nproc_per_node N` each process runs a share of every batch (distributed.py);
+    only the first prints progress and writes the checkpoint.
     """
     settings = TASK_SETTINGS[task]
     tc = TrainConfig(
@@ -278,6 +281,7 @@ def train_supervised(
         **model_options,
     )
     model = build_model(model_name, cfg)
+    processes = distributed.start()
     # log of the goal logits' temperature; learned, it lets the cross-entropy ask for the right
     # argmax without pulling the values away from the MSE's (it is not part of the model)
     goal_log_scale = torch.tensor(float(np.log(tc.goal_scale)), requires_grad=tc.learn_goal_scale)
@@ -298,6 +302,8 @@ def train_supervised(
         )
     steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
     warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, 'attention', False) else 0
+    # the model itself in one process; the warm-up leaves the attention weights unused
+    trained = distributed.wrap(model, processes, find_unused=bool(warmup))
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(
         opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final
     )
@@ -305,7 +311,12 @@ def train_supervised(
     best = ((float('inf'),), None, -1)
     history = []
     start = time.perf_counter()
-    bar = tqdm(range(tc.epochs), desc=f'{task} {model_name}', disable=not progress, unit='ep')
+    bar = tqdm(
+        range(tc.epochs),
+        desc=f'{task} {model_name}',
+        disable=not (progress and processes.main),
+        unit='ep',
+    )
     for epoch in bar:
         model.train()
         if warmup:  # uniform attention (attn weights still 0) == t-RNet, 5-10x cheaper a step
@@ -325,16 +336,19 @@ def train_supervised(
         for p in rng.permutation(len(plan)):
             part, idx = plan[p]
             grids, tokens, values, goals, _ = encoded[part]
+            idx, weight = distributed.shard(idx, processes)  # weight 1.0: the whole batch, alone
             idx = torch.from_numpy(idx)
-            pred = model(grids[idx], _trim(tokens[idx]))
+            pred = trained(grids[idx], _trim(tokens[idx]))
             loss = torch.mean((pred - values[idx]) ** 2)
             if tc.goal_weight:
                 loss = loss + tc.goal_weight * goal_loss(pred, goals[idx], goal_log_scale.exp())
             opt.zero_grad()
-            loss.backward()
+            (loss * weight).backward()
+            distributed.average_gradients([goal_log_scale], processes)
             opt.step()
             sched.step()
-            losses.append(loss.item())
+            losses.append(loss.item() * weight)
+        losses = distributed.batch_losses(losses, processes)
         val_metrics = evaluate(model, vocab, val)
         val_hit = evaluate_hit(model, vocab, val_generated) if val_generated is not None else 0.0
         history.append((float(np.mean(losses)), val_metrics['mse'], val_metrics['pq'], val_hit))
@@ -371,21 +385,26 @@ def train_supervised(
         'val': val_metrics,
         'train_config': vars(tc).copy(),
     }
-    path = save_checkpoint(
-        Path(out) / f'{task}_{model_name}.pt',
-        model_name,
-        model,
-        cfg,
-        vocab,
-        data.entities,
-        task=task,
-        training_data=f'{data.name} ({n_train} train / {len(val)} validation, by world)',
-        seed=tc.seed,
-        best_epoch=best[2],
-        val_metrics=val_metrics,
-        goal_scale=round(float(goal_log_scale.detach().exp()), 3),
-        train_seconds=summary['train_seconds'],
-        train_config=vars(tc).copy(),
-        loss_history=[[round(x, 5) for x in row] for row in history],
-    )
+    # every process validated the same weights; one writes them
+    path = Path(out) / f'{task}_{model_name}.pt'
+    if processes.main:
+        save_checkpoint(
+            path,
+            model_name,
+            model,
+            cfg,
+            vocab,
+            data.entities,
+            task=task,
+            training_data=f'{data.name} ({n_train} train / {len(val)} validation, by world)',
+            seed=tc.seed,
+            best_epoch=best[2],
+            val_metrics=val_metrics,
+            goal_scale=round(float(goal_log_scale.detach().exp()), 3),
+            train_seconds=summary['train_seconds'],
+            train_config=vars(tc).copy(),
+            loss_history=[[round(x, 5) for x in row] for row in history],
+            **({'processes': processes.size} if processes.size > 1 else {}),
+        )
+    distributed.finish(processes)
     return path, summary
