@@ -166,6 +166,8 @@ ABLATIONS = (
     ('learned goal temperature', {'learn_goal_scale': True}, {}),
     ('gradient maps in cells (1 per 4.5)', {}, {'gradient_cells': 4.5}),
     ('no axial views in the head', {}, {'axial': False}),
+    ('no far relation', {}, {'far': False}),
+    ('no instruction in the head', {}, {'head_text': False}),
     ('no world-pickle instructions', {'world_instructions': False}, {}),
     ('no generated worlds', {'synthetic': 0}, {}),
 )
