@@ -32,6 +32,7 @@ from tqdm import tqdm
 
 from .generator import generate, global_goals, local_goals, random_grid
 from .grounder import DEFAULT_CHECKPOINT, Grounder
+from .options import ranged
 
 SIZES = (10, 32, 64, 128, 256, 512, 1024)
 # issue 11's minimum: Grounder.ground (cached instruction) against the output network alone
@@ -363,7 +364,7 @@ def register_cli(subparsers) -> None:
     )
     b.add_argument('--out', default='results/bench.json')
     b.add_argument('--checkpoint', default=DEFAULT_CHECKPOINT)
-    b.add_argument('--sizes', nargs='+', type=int, default=list(SIZES))
+    b.add_argument('--sizes', nargs='+', type=ranged(int, low=1), default=list(SIZES))
     b.add_argument(
         '--budget',
         type=float,
@@ -377,13 +378,18 @@ def register_cli(subparsers) -> None:
         help='seconds one reference (pair-by-pair) forward may take, predicted from the '
         'previous size; larger sizes skip it',
     )
-    b.add_argument('--batch', type=int, default=512, help='maps of 10x10 in the batched forward')
-    b.add_argument('--batch-reps', type=int, default=5)
-    b.add_argument('--ros-requests', type=int, default=300)
-    b.add_argument('--memory-requests', type=int, default=10_000)
+    b.add_argument(
+        '--batch',
+        type=ranged(int, low=1),
+        default=512,
+        help='maps of 10x10 in the batched forward',
+    )
+    b.add_argument('--batch-reps', type=ranged(int, low=1), default=5)
+    b.add_argument('--ros-requests', type=ranged(int, low=1), default=300)
+    b.add_argument('--memory-requests', type=ranged(int, low=1), default=10_000)
     b.add_argument(
         '--threads',
-        type=int,
+        type=ranged(int, low=0),
         default=1,
         help="torch threads for the in-process measurements (the node's default "
         "torch_threads is 1 too); 0: torch's default",
