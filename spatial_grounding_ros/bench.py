@@ -32,6 +32,7 @@ from tqdm import tqdm
 
 from .generator import generate, global_goals, local_goals, random_grid
 from .grounder import DEFAULT_CHECKPOINT, Grounder
+from .measure import peak_rss_mb, percentiles, reset_peak_rss, rss_mb
 from .options import ranged
 
 SIZES = (10, 32, 64, 128, 256, 512, 1024)
@@ -44,31 +45,6 @@ TARGETS = {
     'ros_end_to_end_p99_ms': 5.0,
     'rss_growth_mb': 20.0,
 }
-
-
-def status_mb(field: str, pid: int | str = 'self') -> float:
-    """Return a memory line of /proc/<pid>/status (VmRSS: now, VmHWM: peak), in MB."""
-    with open(f'/proc/{pid}/status') as status:
-        for line in status:
-            if line.startswith(f'{field}:'):
-                return int(line.split()[1]) / 1024
-    raise RuntimeError(f'no {field} in /proc/{pid}/status')
-
-
-def rss_mb() -> float:
-    """Return this process's resident set size now, in MB."""
-    return status_mb('VmRSS')
-
-
-def reset_peak_rss() -> None:
-    """Start the peak RSS (VmHWM) again from the RSS now (Linux: clear_refs 5)."""
-    with open('/proc/self/clear_refs', 'w') as clear_refs:
-        clear_refs.write('5')
-
-
-def peak_rss_mb() -> float:
-    """Return this process's peak RSS since the last reset_peak_rss(), in MB."""
-    return status_mb('VmHWM')
 
 
 def machine() -> dict:
@@ -105,16 +81,6 @@ def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
         goals = global_goals(grid) or local_goals(grid)
         if goals:
             return grid, goals[0][0]
-
-
-def percentiles(seconds: list[float]) -> dict:
-    ms = np.array(seconds) * 1e3
-    return {
-        'n': len(ms),
-        'p50_ms': float(np.percentile(ms, 50)),
-        'p99_ms': float(np.percentile(ms, 99)),
-        'max_ms': float(ms.max()),
-    }
 
 
 def timed(call, budget_s: float, max_reps: int, desc: str) -> dict:
