@@ -237,11 +237,12 @@ def test_ros_client_has_the_environment_spaces():
     (Gymnasium's check_env cannot run on it: its episodes are seeded by the node's parameter,
     so reset(seed=) is refused.)
     """
+    from spatial_grounding_ros.datasets import DEFAULT_DATA
     from spatial_grounding_ros.ros.gridworld_client import ros_envs
 
     train = load_episodes('generator-local', n=20, seed=0)
     env = GridWorldEnv(train, step_limit=10)
-    with ros_envs('generator-local', '', train, RLConfig(step_limit=10), 0) as [client]:
+    with ros_envs('generator-local', DEFAULT_DATA, train, RLConfig(step_limit=10), 0) as [client]:
         assert client.observation_space == env.observation_space
         assert client.action_space == env.action_space
         obs, _ = client.reset()
