@@ -32,6 +32,8 @@ from tqdm import tqdm
 
 from .generator import generate, global_goals, local_goals, random_grid
 from .grounder import DEFAULT_CHECKPOINT, Grounder
+from .measure import peak_rss_mb, percentiles, reset_peak_rss, rss_mb
+from .options import ranged
 
 SIZES = (10, 32, 64, 128, 256, 512, 1024)
 # issue 11's minimum: Grounder.ground (cached instruction) against the output network alone
@@ -43,31 +45,6 @@ TARGETS = {
     'ros_end_to_end_p99_ms': 5.0,
     'rss_growth_mb': 20.0,
 }
-
-
-def status_mb(field: str, pid: int | str = 'self') -> float:
-    """Return a memory line of /proc/<pid>/status (VmRSS: now, VmHWM: peak), in MB."""
-    with open(f'/proc/{pid}/status') as status:
-        for line in status:
-            if line.startswith(f'{field}:'):
-                return int(line.split()[1]) / 1024
-    raise RuntimeError(f'no {field} in /proc/{pid}/status')
-
-
-def rss_mb() -> float:
-    """Return this process's resident set size now, in MB."""
-    return status_mb('VmRSS')
-
-
-def reset_peak_rss() -> None:
-    """Start the peak RSS (VmHWM) again from the RSS now (Linux: clear_refs 5)."""
-    with open('/proc/self/clear_refs', 'w') as clear_refs:
-        clear_refs.write('5')
-
-
-def peak_rss_mb() -> float:
-    """Return this process's peak RSS since the last reset_peak_rss(), in MB."""
-    return status_mb('VmHWM')
 
 
 def machine() -> dict:
@@ -104,16 +81,6 @@ def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
         goals = global_goals(grid) or local_goals(grid)
         if goals:
             return grid, goals[0][0]
-
-
-def percentiles(seconds: list[float]) -> dict:
-    ms = np.array(seconds) * 1e3
-    return {
-        'n': len(ms),
-        'p50_ms': float(np.percentile(ms, 50)),
-        'p99_ms': float(np.percentile(ms, 99)),
-        'max_ms': float(ms.max()),
-    }
 
 
 def timed(call, budget_s: float, max_reps: int, desc: str) -> dict:
@@ -363,7 +330,7 @@ def register_cli(subparsers) -> None:
     )
     b.add_argument('--out', default='results/bench.json')
     b.add_argument('--checkpoint', default=DEFAULT_CHECKPOINT)
-    b.add_argument('--sizes', nargs='+', type=int, default=list(SIZES))
+    b.add_argument('--sizes', nargs='+', type=ranged(int, low=1), default=list(SIZES))
     b.add_argument(
         '--budget',
         type=float,
@@ -377,13 +344,18 @@ def register_cli(subparsers) -> None:
         help='seconds one reference (pair-by-pair) forward may take, predicted from the '
         'previous size; larger sizes skip it',
     )
-    b.add_argument('--batch', type=int, default=512, help='maps of 10x10 in the batched forward')
-    b.add_argument('--batch-reps', type=int, default=5)
-    b.add_argument('--ros-requests', type=int, default=300)
-    b.add_argument('--memory-requests', type=int, default=10_000)
+    b.add_argument(
+        '--batch',
+        type=ranged(int, low=1),
+        default=512,
+        help='maps of 10x10 in the batched forward',
+    )
+    b.add_argument('--batch-reps', type=ranged(int, low=1), default=5)
+    b.add_argument('--ros-requests', type=ranged(int, low=1), default=300)
+    b.add_argument('--memory-requests', type=ranged(int, low=1), default=10_000)
     b.add_argument(
         '--threads',
-        type=int,
+        type=ranged(int, low=0),
         default=1,
         help="torch threads for the in-process measurements (the node's default "
         "torch_threads is 1 too); 0: torch's default",

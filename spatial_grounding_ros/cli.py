@@ -18,31 +18,21 @@ import functools
 import json
 import sys
 
-from .datasets import DEFAULT_DATA, SPLITS, TASKS
+from .datasets import DEFAULT_DATA, SPLITS
+from .tasks import TASKS
 
 
 def cmd_train(args) -> int:
     from . import distributed, shapeworld_training
+    from .options import given_options
     from .training import train_supervised, TrainConfig
 
+    given = given_options(TrainConfig, args)  # the rest: the config's and the task's defaults
     if args.task == shapeworld_training.TASK:
         if distributed.world_size() > 1:  # N copies would each train and write the same file
             raise ValueError('--task shapeworld trains in one process, not under torchrun')
-        return shapeworld_training.cmd_train(args)
-
-    tc = TrainConfig(
-        epochs=args.epochs,
-        batch_size=TrainConfig.batch_size if args.batch_size is None else args.batch_size,
-        lr=args.lr,
-        seed=args.seed,
-        threads=args.threads,
-        attention_warmup=args.attention_warmup,
-        synthetic=args.synthetic,
-        mirrors=args.mirrors,
-        select=args.select,
-        world_instructions=args.world_instructions,
-        goal_weight=args.goal_weight,
-    )
+        return shapeworld_training.cmd_train(args, given)
+    tc = TrainConfig(**given)
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     if distributed.is_main_process():  # under torchrun, one summary, not one per process
         print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
@@ -148,7 +138,9 @@ def build_parser() -> argparse.ArgumentParser:
     from . import shapeworld_training
     from .models import MODELS
     from .noise import add_noise_options
+    from .options import add_options, ranged
     from .shapeworld_models import MODELS as SHAPEWORLD_MODELS
+    from .training import TrainConfig
 
     tasks = [*TASKS, shapeworld_training.TASK]
     models = [*MODELS, *(m for m in SHAPEWORLD_MODELS if m not in MODELS)]
@@ -156,57 +148,18 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
 
-    t = sub.add_parser('train', help="supervised training on a task's train split")
+    t = sub.add_parser(
+        'train',
+        help="supervised training on a task's train split",
+        description="Supervised training on a task's train split. An option not given takes "
+        "the task's value (tasks.py); --task shapeworld takes its own defaults "
+        '(shapeworld_training.TrainConfig: batch size 32, one thread).',
+    )
     t.add_argument('--task', required=True, choices=tasks)
     t.add_argument('--model', required=True, choices=models)
     t.add_argument('--data', default=DEFAULT_DATA)
     t.add_argument('--out', default='out')
-    t.add_argument('--epochs', type=int, default=None)
-    t.add_argument(
-        '--batch-size', type=int, default=None, help='default: 64, ShapeWorld 32 (per task)'
-    )
-    t.add_argument(
-        '--attention-warmup',
-        type=float,
-        default=None,
-        help='share of epochs t-RNetAttn trains with (still uniform) attention off '
-        '(default: per task)',
-    )
-    t.add_argument('--lr', type=float, default=1e-3)
-    t.add_argument(
-        '--synthetic',
-        type=int,
-        default=None,
-        help='generated PuddleWorld examples added to training, all families, '
-        'mixed sizes (default: per task)',
-    )
-    t.add_argument(
-        '--mirrors',
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help='add mirrored copies of the training examples (default: per task)',
-    )
-    t.add_argument(
-        '--world-instructions',
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="add the training worlds' synthetic pickle instructions (default: per task)",
-    )
-    t.add_argument(
-        '--goal-weight',
-        type=float,
-        default=None,
-        help='weight of the goal-cell cross-entropy beside the MSE (default: per task)',
-    )
-    t.add_argument(
-        '--select',
-        choices=['pq', 'mse'],
-        default='pq',
-        help='keep the epoch of the second half with the best validation PQ plus '
-        'generated-validation HIT (ties: MSE), or the lowest MSE',
-    )
-    t.add_argument('--seed', type=int, default=0)
-    t.add_argument('--threads', type=int, default=2)
+    add_options(t, TrainConfig, unset=True)
     t.set_defaults(func=cmd_train)
 
     e = sub.add_parser('eval', help='evaluate a checkpoint on a split')
@@ -222,15 +175,17 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser('reproduce', help='train and evaluate the value-map table')
     r.add_argument('--data', default=DEFAULT_DATA)
     r.add_argument('--out', default='results')
-    r.add_argument('--tasks', nargs='+', default=['pw-local', 'pw-global', 'pw', 'isi'])
-    r.add_argument('--models', nargs='+', default=list(MODELS))
+    r.add_argument('--tasks', nargs='+', default=list(TASKS), choices=TASKS)
+    r.add_argument('--models', nargs='+', default=list(MODELS), choices=list(MODELS))
     r.add_argument(
         '--epochs-scale',
-        type=float,
+        type=ranged(float, low=0.001),
         default=1.0,
         help='multiply every epoch budget (e.g. 0.1 for a quick check)',
     )
-    r.add_argument('--threads', type=int, default=2, help='torch threads per training run')
+    r.add_argument(
+        '--threads', type=ranged(int, low=1), default=2, help='torch threads per training run'
+    )
     r.add_argument(
         '--suite-only',
         action='store_true',
@@ -253,9 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
 def add_rl_commands(sub) -> None:
     from .env import GENERATED
     from .models import MODELS
-    from .options import add_options
-    from .reproduce import RL_TASKS
+    from .options import add_options, ranged
     from .rl import RLConfig
+    from .tasks import RL_TASKS
 
     p = sub.add_parser('rl-train', help='train a model by RL (fitted value iteration)')
     p.add_argument('--task', required=True, choices=[*TASKS, *GENERATED])
@@ -265,7 +220,7 @@ def add_rl_commands(sub) -> None:
     add_options(p, RLConfig)
     p.add_argument(
         '--generated',
-        type=int,
+        type=ranged(int, low=1),
         default=500,
         help='number of generated training examples (generator* tasks)',
     )
@@ -286,11 +241,13 @@ def add_rl_commands(sub) -> None:
     r.add_argument('--models', nargs='+', default=['t-rnet-attn', 't-cnn'], choices=list(MODELS))
     r.add_argument(
         '--episodes-scale',
-        type=float,
+        type=ranged(float, low=0.001),
         default=1.0,
         help='multiply every episode budget (e.g. 0.05 for a quick check)',
     )
-    r.add_argument('--jobs', type=int, default=2, help='runs in parallel, one thread each')
+    r.add_argument(
+        '--jobs', type=ranged(int, low=1), default=2, help='runs in parallel, one thread each'
+    )
     r.set_defaults(func=cmd_reproduce_rl)
 
 

@@ -27,11 +27,11 @@ import numpy as np
 
 from . import world
 from .entities import EntityTable, ISI, PUDDLEWORLD
+from .tasks import task as find_task
 
 # Where the data sets are read from unless a command, node parameter or call says otherwise:
 # the one place this path is written (the Makefile and config/gridworld.yaml take it from here).
 DEFAULT_DATA = '../shared/data'
-TASKS = ('pw-local', 'pw-global', 'pw', 'isi')
 SPLITS = ('train', 'dev', 'test')
 
 # The paper's test worlds (data README; they give 1566/399 local and 1071/272 global).
@@ -296,21 +296,16 @@ def load_isi(data_dir: str | Path, split: str) -> GroundingSet:
     return _stack(f'isi-{split}', ISI, rows)
 
 
-# The PuddleWorld modes (world folders) of each PuddleWorld task.
-PW_MODES = {'pw-local': ('local',), 'pw-global': ('global',), 'pw': ('local', 'global')}
-
-
 def load_task(task: str, split: str, data_dir: str | Path) -> GroundingSet:
     """Return a task's split: pw-local, pw-global, pw (both, 10x10) or isi."""
-    if task not in TASKS:
-        raise ValueError(f'unknown task {task!r}; use one of {", ".join(TASKS)}')
-    if task == 'isi':
+    found = find_task(task)
+    if found.data == 'isi':
         return load_isi(data_dir, split)
     if split == 'dev':
         raise ValueError(
             'PuddleWorld has no dev split: the validation split is carved out of train'
         )
-    parts = [load_puddleworld(data_dir, mode, split) for mode in PW_MODES[task]]
+    parts = [load_puddleworld(data_dir, mode, split) for mode in found.pw_modes]
     return parts[0] if len(parts) == 1 else GroundingSet.concat(f'{task}-{split}', parts)
 
 

@@ -34,7 +34,7 @@ from .datasets import DEFAULT_DATA, GroundingSet, load_task
 from .generator import generate
 
 DEFAULT_STEP_LIMIT = 50
-# Episode sources made by the generator (no data set needed); the rest are datasets.TASKS.
+# Episode sources made by the generator (no data set needed); the rest are tasks.TASKS.
 GENERATED = ('generator', 'generator-local', 'generator-global')
 
 

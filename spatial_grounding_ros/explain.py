@@ -25,10 +25,11 @@ import torch
 
 from . import world
 from .checkpoints import load_checkpoint, Loaded
-from .datasets import DEFAULT_DATA, load_task, SPLITS, TASKS
+from .datasets import DEFAULT_DATA, load_task, SPLITS
 from .models import neighbour_offsets, shifted, TRNet
 from .noise import add_noise, add_noise_options, NOISES, require_unseen_rows
 from .plots import plot_explanation
+from .tasks import TASKS
 from .text import tokenize
 
 PAIRS_SHOWN = 3

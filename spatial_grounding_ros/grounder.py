@@ -70,6 +70,17 @@ class Grounder:
         grid = np.asarray(grid)
         if grid.ndim != 2 or 0 in grid.shape:
             raise ValueError(f'grid must be a non-empty 2-D array, got shape {grid.shape}')
+        # entity indices: a fraction (or NaN) names no entity, and int64 would truncate it to one
+        if grid.dtype.kind not in 'iu':
+            if grid.dtype.kind == 'f':
+                not_whole = grid[~(np.isfinite(grid) & (grid == np.round(grid)))]
+            else:  # bool, complex, strings, objects: not entity indices even when they look it
+                not_whole = grid.reshape(-1)
+            if not_whole.size:
+                raise ValueError(
+                    f'grid must hold integer entity indices, got {grid.dtype} values such as '
+                    f'{not_whole[0].item()!r}'
+                )
         bad = np.unique(grid[(grid < 0) | (grid >= len(self.entities))])
         if bad.size:
             raise ValueError(

@@ -7,11 +7,13 @@
 """
 A hyper-parameter dataclass is also its command-line options.
 
-Each field is declared once, with `option(default, help, low=, high=)`: `add_options` makes an
-argparse option of every field (`--batch-maps` for `batch_maps`, `--mirrors/--no-mirrors` for a
-bool) with that default, help and range, and `from_options` builds the dataclass back from the
-parsed arguments. A dataclass that calls `check(self)` in `__post_init__` refuses the same bad
-values from Python, so a default or a range cannot differ between the API and the CLI.
+Each field is declared once, with `option(default, help, low=, high=, choices=)`: `add_options`
+makes an argparse option of every field (`--batch-maps` for `batch_maps`, `--mirrors/--no-mirrors`
+for a bool) with that default, help and range, and `from_options` builds the dataclass back from
+the parsed arguments (`given_options`: only those given, when the rest has other defaults, such
+as a task's). `ranged` range-checks an option that is no field. A dataclass that calls
+`check(self)` in `__post_init__` refuses the same bad values from Python, so a default or a range
+cannot differ between the API and the CLI.
 
     @dataclass
     class Config:
@@ -30,9 +32,17 @@ from dataclasses import field, fields
 import typing
 
 
-def option(default, help: str, low: float | None = None, high: float | None = None):  # noqa: A002
-    """Declare a field: its default, what it means, and its inclusive range (None: open)."""
-    return field(default=default, metadata={'help': help, 'low': low, 'high': high})
+def option(
+    default,
+    help: str,  # noqa: A002
+    low: float | None = None,
+    high: float | None = None,
+    choices: tuple | None = None,
+):
+    """Declare a field: its default, what it means, its inclusive range or its choices."""
+    return field(
+        default=default, metadata={'help': help, 'low': low, 'high': high, 'choices': choices}
+    )
 
 
 def constraint(f) -> str:
@@ -54,6 +64,9 @@ def problem(f, value) -> str | None:
     """Return what is wrong with `value` for field `f`, or None (None itself is always fine)."""
     if value is None or isinstance(value, bool):
         return None
+    choices = f.metadata.get('choices')
+    if choices is not None and value not in choices:
+        return f'must be one of {", ".join(map(str, choices))}, got {value!r}'
     low, high = f.metadata.get('low'), f.metadata.get('high')
     if (low is not None and value < low) or (high is not None and value > high):
         return f'must be {constraint(f)}, got {value!r}'
@@ -68,9 +81,17 @@ def check(config) -> None:
             raise ValueError(f'{f.name} {reason}')
 
 
-def _value_type(f, hint):
-    """Parse and range-check one command-line value of field `f`."""
-    kind = next((a for a in typing.get_args(hint) if a is not type(None)), hint)
+def ranged(kind, low: float | None = None, high: float | None = None):
+    """
+    Return an argparse `type` that parses `kind` and refuses values outside low..high.
+
+    For options that are no dataclass field: `p.add_argument('--n', type=ranged(int, low=1))`.
+    """
+    return _parse_checked(kind, option(None, '', low=low, high=high))
+
+
+def _parse_checked(kind, f):
+    """Parse one command-line value of field `f` as `kind` and check its range."""
 
     def parse(text: str):
         value = kind(text)  # a ValueError here is argparse's "invalid int value: 'x'"
@@ -80,28 +101,52 @@ def _value_type(f, hint):
         return value
 
     parse.__name__ = kind.__name__
-    return kind, parse
+    return parse
 
 
-def add_options(parser: argparse.ArgumentParser, cls, skip: tuple[str, ...] = ()) -> None:
-    """Add one option per field of dataclass `cls` (except `skip`) to `parser`."""
+def add_options(
+    parser: argparse.ArgumentParser, cls, skip: tuple[str, ...] = (), unset: bool = False
+) -> None:
+    """
+    Add one option per field of dataclass `cls` (except `skip`) to `parser`.
+
+    With `unset`, an option not given parses as None (the help still shows the field's
+    default), so `given_options` can tell which were given.
+    """
     hints = typing.get_type_hints(cls)
     for f in fields(cls):
         if f.name in skip:
             continue
         flag = '--' + f.name.replace('_', '-')
-        kind, parse = _value_type(f, hints[f.name])
-        notes = [constraint(f), '' if f.default is None else 'default: %(default)s']
-        notes = '; '.join(n for n in notes if n)
+        hint = hints[f.name]
+        kind = next((a for a in typing.get_args(hint) if a is not type(None)), hint)
+        shown = '' if f.default is None else f'default: {f.default}'.replace('%', '%%')
+        notes = '; '.join(n for n in (constraint(f), shown) if n)
         text = ' '.join(t for t in (f.metadata.get('help', ''), notes and f'({notes})') if t)
+        default = None if unset else f.default
         if kind is bool:
             parser.add_argument(
-                flag, action=argparse.BooleanOptionalAction, default=f.default, help=text
+                flag, action=argparse.BooleanOptionalAction, default=default, help=text
             )
+        elif f.metadata.get('choices'):
+            parser.add_argument(flag, choices=f.metadata['choices'], default=default, help=text)
         else:
             parser.add_argument(
-                flag, type=parse, default=f.default, metavar=kind.__name__.upper(), help=text
+                flag,
+                type=_parse_checked(kind, f),
+                default=default,
+                metavar=kind.__name__.upper(),
+                help=text,
             )
+
+
+def given_options(cls, args: argparse.Namespace) -> dict:
+    """Return the fields of `cls` whose options were given (added with `unset`)."""
+    return {
+        f.name: getattr(args, f.name)
+        for f in fields(cls)
+        if getattr(args, f.name, None) is not None
+    }
 
 
 def from_options(cls, args: argparse.Namespace, **values):

@@ -28,20 +28,9 @@ from .checkpoints import load_checkpoint, PACKAGED_DIR
 from .datasets import load_task
 from .results import merge_rows
 from .rl import RLConfig, train_rl
-from .training import EPOCHS, evaluate, train_supervised, TrainConfig
+from .tasks import RL_TASKS, TASKS
+from .training import evaluate, train_supervised, TrainConfig
 
-# Table 1 of the paper (value maps, test split): (MSE, PQ, MD); ISI has no PQ there.
-PAPER = {
-    ('pw-local', 't-cnn'): (0.25, 0.94, 2.34),
-    ('pw-local', 't-uvfa'): (3.23, 0.57, 4.97),
-    ('pw-local', 't-rnet-attn'): (0.22, 0.94, 1.95),
-    ('pw-global', 't-cnn'): (0.41, 0.89, 3.81),
-    ('pw-global', 't-uvfa'): (1.90, 0.62, 5.31),
-    ('pw-global', 't-rnet-attn'): (0.40, 0.91, 3.82),
-    ('isi', 't-cnn'): (0.15, None, 3.14),
-    ('isi', 't-uvfa'): (None, None, 4.61),
-    ('isi', 't-rnet-attn'): (0.15, None, 3.43),
-}
 SHIPPED = ('t-rnet-attn', 't-cnn')
 # The suite table's columns: the node's default first, then the per-task checkpoints.
 SUITE_CHECKPOINTS = (
@@ -76,7 +65,7 @@ def markdown_table(rows: list[dict]) -> str:
         '| --- | --- | --- | --- | --- | --- | --- | --- |',
     ]
     for r in rows:
-        paper = PAPER.get((r['task'], r['model']))
+        paper = TASKS[r['task']].paper.get(r['model']) if r['task'] in TASKS else None
         paper_s = ' / '.join(_fmt(x) for x in paper) if paper else '-'
         lines.append(
             f'| {r["task"]} | {r["model"]} | {r["test"]["mse"]:.3f} | {r["test"]["pq"]:.3f} '
@@ -90,7 +79,7 @@ def reproduce_value_maps(
     data_dir: str,
     out: str,
     epochs_scale: float = 1.0,
-    tasks=('pw-local', 'pw-global', 'pw', 'isi'),
+    tasks=tuple(TASKS),
     models=('t-rnet-attn', 't-rnet', 't-cnn', 't-uvfa'),
     threads: int = 2,
 ) -> list[dict]:
@@ -101,7 +90,8 @@ def reproduce_value_maps(
     for task in tasks:
         test = load_task(task, 'test', data_dir)
         for model_name in models:
-            tc = TrainConfig(epochs=max(1, int(EPOCHS[task] * epochs_scale)), threads=threads)
+            epochs = max(1, int(TASKS[task].epochs * epochs_scale))
+            tc = TrainConfig(epochs=epochs, threads=threads)
             path, summary = train_supervised(task, model_name, data_dir, ckpt_dir, tc)
             loaded = load_checkpoint(path)
             row = {
@@ -242,19 +232,17 @@ def reproduce_ablation(
 
 # --- the paper's RL rows: `make reproduce-rl` --------------------------------------------
 
-RL_TASKS = ('pw-local', 'pw-global', 'isi')
-# The paper's Table (RL, test split): (PQ, MD) per model and task.
-PAPER_RL = {
-    't-cnn': {'pw-local': (0.89, 2.03), 'pw-global': (0.91, 3.80), 'isi': (0.74, 3.94)},
-    't-uvfa': {'pw-local': (0.56, 4.71), 'pw-global': (0.62, 6.28), 'isi': (0.15, 4.61)},
-    't-rnet-attn': {'pw-local': (0.91, 2.10), 'pw-global': (0.93, 4.23), 'isi': (0.84, 3.79)},
-}
-# Episode budgets per task, the same for every model, sized for about an hour on 2 cores:
-# RLConfig's default, less on ISI, where t-RNetAttn's attention phase (the last 15% of
-# episodes) is slowest with the long instructions.
-RL_EPISODES = {'pw-local': RLConfig.episodes, 'pw-global': RLConfig.episodes, 'isi': 12_000}
 # relative cost per episode, to start the longest runs first
 RL_COST = {'t-rnet-attn': 10, 't-rnet': 3, 't-cnn': 1, 't-uvfa': 1}
+
+
+def paper_rl() -> dict:
+    """Return the paper's RL (PQ, MD) by model, then task: the head of results/rl.json."""
+    table: dict = {}
+    for task in RL_TASKS:
+        for model, numbers in TASKS[task].paper_rl.items():
+            table.setdefault(model, {})[task] = numbers
+    return table
 
 
 def rl_table(results: list[dict]) -> str:
@@ -267,7 +255,7 @@ def rl_table(results: list[dict]) -> str:
         '| --- | --- | --- | --- | --- | --- | --- | --- |',
     ]
     for r in results:
-        pq, md = PAPER_RL.get(r['model'], {}).get(r['task'], (None, None))
+        pq, md = TASKS[r['task']].paper_rl.get(r['model'], (None, None))
         lines.append(
             f'| {r["task"]} | {r["model"]} | {r["test"]["pq"]:.2f} | {_fmt(pq)} '
             f'| {r["test"]["md"]:.2f} | {_fmt(md)} | {r["episodes"]} '
@@ -295,11 +283,11 @@ def reproduce_rl(
 
     runs = sorted(
         ((m, t) for m in models for t in tasks),
-        key=lambda mt: -RL_EPISODES[mt[1]] * RL_COST[mt[0]] * (3 if mt[1] == 'isi' else 1),
+        key=lambda mt: -TASKS[mt[1]].rl_episodes * RL_COST[mt[0]] * (3 if mt[1] == 'isi' else 1),
     )
     head = {
         'command': f'spatial-grounding reproduce-rl --data {data_dir} --out {out}',
-        'paper': PAPER_RL,
+        'paper': paper_rl(),
     }
     rows = []
     with ProcessPoolExecutor(max_workers=jobs) as pool:
@@ -310,7 +298,7 @@ def reproduce_rl(
                 m,
                 data_dir,
                 checkpoints,
-                RLConfig(episodes=max(1, int(RL_EPISODES[t] * scale))),
+                RLConfig(episodes=max(1, int(TASKS[t].rl_episodes * scale))),
                 progress=False,
             )
             for m, t in runs

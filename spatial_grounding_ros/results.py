@@ -21,7 +21,7 @@ import os
 from pathlib import Path
 from typing import Callable
 
-from .datasets import TASKS
+from .tasks import TASKS
 
 
 @contextlib.contextmanager
@@ -50,7 +50,7 @@ def merge_rows(
     """
     Add `rows` to the list `key` of JSON file `path`, replacing rows of the same (task, model).
 
-    The file becomes `{**head, key: merged rows}`, rows in task order (datasets.TASKS, other
+    The file becomes `{**head, key: merged rows}`, rows in task order (tasks.TASKS, other
     tasks last) then by model; with `table`, `path`'s `.md` sibling becomes `table(merged)`.
     Returns the merged rows.
     """

@@ -50,8 +50,9 @@ from .datasets import GroundingSet
 from .env import GridWorldEnv, load_episodes
 from .models import build_model, ModelConfig
 from .options import check, option
+from .tasks import TASKS
 from .text import Vocabulary
-from .training import predict, TASK_SETTINGS
+from .training import predict
 
 
 @dataclass
@@ -89,7 +90,7 @@ class RLConfig:
     )
     mirrors: bool | None = option(
         None, "also learn from the mirror images of each map (default: the task's, "
-        'training.TASK_SETTINGS: on for PuddleWorld)',
+        'tasks.py: on for PuddleWorld and generated worlds)',
     )
     seed: int = option(0, 'seed of the weights, the exploration and the episodes', low=0,
                        high=2**32 - 1)
@@ -327,7 +328,8 @@ def train_rl(
     cfg = replace(
         cfg,
         step_limit=cfg.step_limit or 5 * max(shape),
-        mirrors=TASK_SETTINGS.get(task, {}).get('mirrors', True)
+        # generated worlds (not in TASKS) are PuddleWorld's kind: mirrored too
+        mirrors=(TASKS[task].mirrors if task in TASKS else True)
         if cfg.mirrors is None
         else cfg.mirrors,
     )

@@ -17,7 +17,7 @@ is another correctly labelled one.
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 import json
 from multiprocessing import get_context
 from pathlib import Path
@@ -212,12 +212,6 @@ def train(
 
 # --- commands -----------------------------------------------------------------------------
 
-# `train` options of the grid tasks that ShapeWorld has no use for (None: not given)
-GRID_ONLY_OPTIONS = (
-    'attention_warmup', 'synthetic', 'mirrors', 'world_instructions', 'goal_weight'
-)
-
-
 def add_cli_options(train_parser, eval_parser) -> None:
     """Add the options of --task shapeworld (the noise options: noise.add_noise_options)."""
     for p in (train_parser, eval_parser):
@@ -236,19 +230,14 @@ def add_cli_options(train_parser, eval_parser) -> None:
     )
 
 
-def cmd_train(args) -> int:
-    given = [name for name in GRID_ONLY_OPTIONS if getattr(args, name) is not None]
-    if given:
-        options = ', '.join('--' + name.replace('_', '-') for name in given)
+def cmd_train(args, given: dict) -> int:
+    """`train --task shapeworld`: `given` holds the train options given (the grid tasks')."""
+    ours = {f.name for f in fields(TrainConfig)}
+    other = [name for name in given if name not in ours]
+    if other:
+        options = ', '.join('--' + name.replace('_', '-') for name in other)
         raise ValueError(f'{options}: not an option of --task {TASK}')
-    tc = TrainConfig(
-        epochs=args.epochs,
-        batch_size=TrainConfig.batch_size if args.batch_size is None else args.batch_size,
-        lr=args.lr,
-        seed=args.seed,
-        threads=args.threads,
-    )
-    path, summary = train(args.model, args.out, tc, args.cache)
+    path, summary = train(args.model, args.out, TrainConfig(**given), args.cache)
     print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
     return 0
 

@@ -29,6 +29,7 @@ from . import world
 from .checkpoints import load_checkpoint
 from .entities import PUDDLEWORLD
 from .generator import COMPOSITIONAL_FAMILIES, FAMILIES, GLOBAL_FAMILIES, LOCAL_FAMILIES, sample
+from .options import ranged
 from .training import predict_maps
 
 GROUPS = {
@@ -221,9 +222,9 @@ def cmd_suite(args) -> int:
 def register_cli(sub) -> None:
     p = sub.add_parser('suite', help='exact-goal rate per relation family on generated worlds')
     p.add_argument('--checkpoint', default='pw_t-rnet-attn')
-    p.add_argument('--sizes', type=int, nargs='+', default=list(DEFAULT_SIZES))
-    p.add_argument('--n', type=int, default=100, help='worlds per family and size')
-    p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--sizes', type=ranged(int, low=5), nargs='+', default=list(DEFAULT_SIZES))
+    p.add_argument('--n', type=ranged(int, low=1), default=100, help='worlds per family and size')
+    p.add_argument('--seed', type=ranged(int, low=0), default=0)
     p.add_argument('--families', nargs='+', default=list(FAMILIES), choices=FAMILIES)
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.add_argument('--out', default=None, help='write suite.json and failure PNGs here')

@@ -16,7 +16,7 @@ selects the checkpoint; the test split is only ever evaluated.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 import time
 
@@ -25,95 +25,93 @@ import torch
 import torch.nn.functional as F
 from tqdm import tqdm
 
-from . import distributed, world
+from . import distributed, tasks, world
 from .augment import with_mirrors
 from .checkpoints import save_checkpoint
 from .datasets import (
     GroundingSet,
     load_task,
     load_world_instructions,
-    PW_MODES,
     pw_world_ids,
     split_by_world,
 )
 from .generator import generate, MODES
 from .models import build_model, ModelConfig
+from .options import check, option
 from .text import Vocabulary
 
-# Per-task settings, one row per task.
-# epochs: the budget (the validation split picks the best epoch within it). PuddleWorld
-#   epochs go over the 4x mirrored human set plus the generated and world-pickle examples.
-# synthetic: generated worlds added to training (every family of the task's generator
-#   mode, spread over SYNTHETIC_SIZES); validation and test stay human.
-# world_instructions: add the world pickles' synthetic instructions of the training worlds.
-# mirrors: add the left-right, top-bottom and both-ways mirror images of the human examples
-#   (augment.py). ISI is off because it measured worse: t-RNet's ISI test MSE was 0.178
-#   with `--mirrors --epochs 10` (40 passes) against 0.148 without (25 passes).
-# attention_warmup: share of epochs t-RNetAttn trains with (still uniform) attention off,
-#   the cheap phase; ISI trains attention from the start, as the paper does.
-# goal_weight: weight of the goal-cell cross-entropy (every model, baselines included).
-#   ISI keeps 0 until it is measured there: its rows were trained without it.
-# model: ModelConfig fields for this task's models (none: the paper's). Gradient maps that
-#   rise by 1 every 4.5 cells instead of spanning -1..1 measured worse, at 10x10 and 32x32
-#   (results/ablation.md).
-_PW = {
-    'synthetic': 32000,
-    'world_instructions': True,
-    'mirrors': True,
-    'attention_warmup': 0.85,
-    'goal_weight': 1.0,
-    # map-wide row and column views in the head, the far relation, the instruction in the head
-    'model': {'axial': True, 'far': True, 'head_text': True},
-}
-TASK_SETTINGS = {
-    'pw-local': dict(_PW, epochs=40),
-    'pw-global': dict(_PW, epochs=40),
-    'pw': dict(_PW, epochs=40),
-    'isi': {
-        'epochs': 25,
-        'synthetic': 0,
-        'world_instructions': False,
-        'mirrors': False,
-        'attention_warmup': 0.0,
-        'goal_weight': 0.0,
-        'model': {},
-    },
-}
-EPOCHS = {task: s['epochs'] for task, s in TASK_SETTINGS.items()}
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
 SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
-GENERATOR_MODE = {'pw-local': 'local', 'pw-global': 'global', 'pw': 'training'}
 
 
 @dataclass
 class TrainConfig:
     """
-    Training hyper-parameters.
+    Training hyper-parameters, each declared once: `train` makes its options of them.
 
-    Adam at the paper's lr 1e-3; batch 64, not the paper's 512: PW local has ~1400 training maps,
-    so 512 gives 3 steps an epoch, and on a CPU budget the number of steps, not the batch, is what
-    limits the fit.
+    A field left at None takes the task's value (tasks.py). Adam at the paper's lr 1e-3; batch
+    64, not the paper's 512: PW local has ~1400 training maps, so 512 gives 3 steps an epoch, and
+    on a CPU budget the number of steps, not the batch, is what limits the fit.
     """
 
-    epochs: int | None = None  # None: the task's (TASK_SETTINGS)
-    batch_size: int = 64
-    lr: float = 1e-3
-    lr_final: float = 1e-4  # cosine decay to this
-    val_fraction: float = 0.1  # of the training worlds
-    attention_warmup: float | None = None  # share of epochs with attention off; None: per task
-    synthetic: int | None = None  # generated examples added to training; None: the task's
-    # the training worlds' pickle instructions; None: the task's
-    world_instructions: bool | None = None
-    mirrors: bool | None = None  # add mirrored copies of the human examples; None: the task's
-    goal_weight: float | None = None  # weight of the goal-cell cross-entropy; None: the task's
-    goal_scale: float = 5.0  # values times this are the goal cross-entropy's logits (at start)
-    # learned, that temperature gained < 1 point of suite HIT and cost 0.05 human-test PQ
-    learn_goal_scale: bool = False
-    select: str = 'pq'  # checkpoint = epoch of the second half with the best validation
-    # PQ plus generated-validation HIT (ties: MSE), or "mse"
-    seed: int = 0
-    threads: int = 2
+    epochs: int | None = option(None, "training epochs (default: the task's)", low=1)
+    batch_size: int = option(64, 'examples per optimizer step', low=1)
+    lr: float = option(1e-3, 'Adam learning rate at the start', low=0.0)
+    lr_final: float = option(1e-4, 'learning rate at the end of the cosine decay', low=0.0)
+    val_fraction: float = option(
+        0.1, 'share of the training worlds held out for validation', low=0.01, high=0.9
+    )
+    attention_warmup: float | None = option(
+        None,
+        'share of epochs t-RNetAttn trains with (still uniform) attention off (default: the '
+        "task's)",
+        low=0.0,
+        high=1.0,
+    )
+    synthetic: int | None = option(
+        None,
+        'generated PuddleWorld examples added to training, all families, mixed sizes (default: '
+        "the task's)",
+        low=0,
+    )
+    world_instructions: bool | None = option(
+        None, "add the training worlds' synthetic pickle instructions (default: the task's)"
+    )
+    mirrors: bool | None = option(
+        None, "add mirrored copies of the human training examples (default: the task's)"
+    )
+    goal_weight: float | None = option(
+        None, "weight of the goal-cell cross-entropy beside the MSE (default: the task's)",
+        low=0.0,
+    )
+    goal_scale: float = option(
+        5.0, "the values times this are the goal cross-entropy's logits (at the start)",
+        low=0.01,
+    )
+    learn_goal_scale: bool = option(False, "learn the goal logits' temperature")
+    select: str = option(
+        'pq', 'keep the epoch of the second half with the best validation PQ plus '
+        'generated-validation HIT (ties: MSE), or the lowest MSE of all epochs',
+        choices=('pq', 'mse'),
+    )
+    seed: int = option(0, 'seed of the weights, the split and the batches', low=0, high=2**32 - 1)
+    threads: int = option(2, 'torch threads', low=1)
+
+    def __post_init__(self):
+        check(self)
+
+    def for_task(self, task: str) -> 'TrainConfig':
+        """Return this config with every field left at None set to `task`'s value."""
+        settings = tasks.task(task)
+        return replace(
+            self,
+            **{
+                f.name: getattr(settings, f.name)
+                for f in fields(self)
+                if getattr(self, f.name) is None
+            },
+        )
 
 
 def encode(vocab: Vocabulary, data: GroundingSet) -> tuple[torch.Tensor, torch.Tensor]:
@@ -186,16 +184,9 @@ def training_parts(
     parts = [human]
     if tc.world_instructions:
         held_out = set(val.worlds)
-        parts.append(
-            load_world_instructions(
-                data_dir, [w for w in pw_world_ids(data_dir, PW_MODES[task]) if w not in held_out]
-            )
-        )
+        worlds = pw_world_ids(data_dir, tasks.task(task).pw_modes)
+        parts.append(load_world_instructions(data_dir, [w for w in worlds if w not in held_out]))
     if tc.synthetic:
-        if task not in GENERATOR_MODE:
-            raise ValueError(
-                f'--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld'
-            )
         for n, (size, share) in enumerate(SYNTHETIC_SIZES):
             count = int(round(tc.synthetic * share))
             if count:
@@ -203,7 +194,7 @@ def training_parts(
                     generate(
                         count,
                         seed=10_000 + 100 * tc.seed + n,
-                        mode=GENERATOR_MODE[task],
+                        mode=tasks.task(task).generator_mode,
                         size=size,
                     )
                 )
@@ -227,10 +218,10 @@ def goal_loss(pred: torch.Tensor, goals: torch.Tensor, scale) -> torch.Tensor:
 
 def generated_validation(task: str, seed: int, per_family: int = 40) -> GroundingSet | None:
     """Fresh generated worlds (never trained on) of every family the task trains on."""
-    if task not in GENERATOR_MODE:
+    mode = tasks.task(task).generator_mode
+    if mode is None:
         return None
-    families = MODES[GENERATOR_MODE[task]]
-    return generate(per_family * len(families), seed=20_000 + seed, mode=GENERATOR_MODE[task])
+    return generate(per_family * len(MODES[mode]), seed=20_000 + seed, mode=mode)
 
 
 def train_supervised(
@@ -252,18 +243,12 @@ def train_supervised(
     Under `torchrun --nproc_per_node N` each process runs a share of every batch (distributed.py);
     only the first prints progress and writes the checkpoint.
     """
-    settings = TASK_SETTINGS[task]
-    tc = TrainConfig(
-        **{
-            **vars(tc),
-            **{
-                key: value
-                for key, value in settings.items()
-                if key != 'model' and getattr(tc, key) is None
-            },
-        }
-    )
-    model_options = {**settings['model'], **model_options}
+    tc = tc.for_task(task)
+    if tc.synthetic and tasks.task(task).generator_mode is None:
+        raise ValueError(
+            f'--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld'
+        )
+    model_options = {**tasks.task(task).model, **model_options}
     if model_name not in ('t-rnet-attn', 't-rnet'):  # the far relation is a relation network's
         model_options.pop('far', None)
     torch.manual_seed(tc.seed)

@@ -123,6 +123,89 @@ def test_rl_train_refuses_an_option_out_of_its_range(option, value, needle):
     assert_one_line_error(r, needle)
 
 
+@pytest.mark.parametrize(
+    'argv, needle',
+    [
+        (['--epochs', '-3'], 'argument --epochs: must be at least 1, got -3'),
+        (['--epochs', '0'], 'argument --epochs: must be at least 1, got 0'),
+        (['--batch-size', '0'], 'argument --batch-size: must be at least 1, got 0'),
+        (['--synthetic', '-5'], 'argument --synthetic: must be at least 0, got -5'),
+        (['--attention-warmup', '1.5'], 'argument --attention-warmup: must be 0..1, got 1.5'),
+        (['--threads', '0'], 'argument --threads: must be at least 1, got 0'),
+        (['--lr', 'fast'], "argument --lr: invalid float value: 'fast'"),
+        (['--select', 'hit'], "argument --select: invalid choice: 'hit'"),
+    ],
+)
+def test_train_refuses_an_option_out_of_its_range(argv, needle, tmp_path):
+    """
+    Each range is declared once, in TrainConfig: the command refuses before any work.
+
+    The data folder is empty, so a command that went on would fail on the data instead, with
+    another message.
+    """
+    r = run('train', '--task', 'pw-local', '--model', 't-cnn', '--data', str(tmp_path), *argv)
+    assert_one_line_error(r, needle)
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    'argv, needle',
+    [
+        (['reproduce', '--threads', '0'], 'argument --threads: must be at least 1, got 0'),
+        (['reproduce', '--tasks', 'pw-mars'], "argument --tasks: invalid choice: 'pw-mars'"),
+        (['reproduce-rl', '--jobs', '0'], 'argument --jobs: must be at least 1, got 0'),
+        (['reproduce-rl', '--episodes-scale', '-1'], 'argument --episodes-scale: must be'),
+        (['suite', '--n', '0'], 'argument --n: must be at least 1, got 0'),
+        (['demo', '--episodes', '0'], 'argument --episodes: must be at least 1, got 0'),
+    ],
+)
+def test_other_commands_refuse_a_count_out_of_its_range(argv, needle):
+    from spatial_grounding_ros.cli import build_parser
+
+    with pytest.raises(SystemExit) as stop:
+        build_parser().parse_args(argv)
+    assert stop.value.code == 2
+    r = run(*argv)
+    assert_one_line_error(r, needle)
+
+
+def test_train_options_are_the_config_fields():
+    """`train` has one option per TrainConfig field; options not given leave the defaults."""
+    from dataclasses import fields
+
+    from spatial_grounding_ros.cli import build_parser
+    from spatial_grounding_ros.options import given_options
+    from spatial_grounding_ros.tasks import TASKS
+    from spatial_grounding_ros.training import TrainConfig
+
+    base = ['train', '--task', 'pw', '--model', 't-cnn']
+    args = build_parser().parse_args(base)
+    assert given_options(TrainConfig, args) == {}
+    assert TrainConfig().for_task('pw') == TrainConfig(
+        epochs=TASKS['pw'].epochs,
+        synthetic=TASKS['pw'].synthetic,
+        world_instructions=True,
+        mirrors=True,
+        attention_warmup=TASKS['pw'].attention_warmup,
+        goal_weight=TASKS['pw'].goal_weight,
+    )
+    args = build_parser().parse_args(
+        base + ['--no-mirrors', '--epochs', '7', '--batch-size', '8', '--select', 'mse']
+    )
+    given = given_options(TrainConfig, args)
+    assert given == {'mirrors': False, 'epochs': 7, 'batch_size': 8, 'select': 'mse'}
+    # a value given wins over the task's
+    assert TrainConfig(**given).for_task('pw').epochs == 7
+    assert all(f.metadata['help'] for f in fields(TrainConfig))
+    with pytest.raises(ValueError, match='batch_size must be at least 1, got 0'):
+        TrainConfig(batch_size=0)
+
+
+def test_shapeworld_train_refuses_the_grid_options():
+    r = run('train', '--task', 'shapeworld', '--model', 't-vgg', '--synthetic', '10')
+    assert_one_line_error(r, '--synthetic: not an option of --task shapeworld')
+
+
 def test_rl_options_are_the_config_fields():
     """`rl-train` has one option per RLConfig field, with the field's default and help."""
     from dataclasses import fields

@@ -263,7 +263,7 @@ def test_shapeworld_docs_page_shows_the_noise_table():
     [expected] = tables((RESULTS / 'shapeworld_noise.md').read_text())
     docs = (REPO / 'docs' / 'shapeworld.md').read_text()
     assert expected in tables(docs)
-    assert 'docs/shapeworld.md' in readme_section('Results: ShapeWorld')
+    assert '(docs/shapeworld.md)' in readme_section('Results')
 
 
 @pytest.mark.parametrize('run', shapeworld_results()['runs'], ids=lambda r: r['model'])

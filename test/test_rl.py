@@ -228,3 +228,27 @@ def test_reproduce_rl_keeps_rows_of_earlier_runs(data_dir, tmp_path):
     assert rows[0]['episodes'] == 1 and rows[0]['test']['n'] == 399
     table = (tmp_path / 'rl.md').read_text()
     assert '| pw-local | t-cnn |' in table and '| isi | t-cnn | 0.50 | 0.74 |' in table
+
+
+def test_ros_client_has_the_environment_spaces():
+    """
+    The ROS client is GridWorldEnv's interface: the same spaces, observations inside them.
+
+    (Gymnasium's check_env cannot run on it: its episodes are seeded by the node's parameter,
+    so reset(seed=) is refused.)
+    """
+    from spatial_grounding_ros.datasets import DEFAULT_DATA
+    from spatial_grounding_ros.ros.gridworld_client import ros_envs
+
+    train = load_episodes('generator-local', n=20, seed=0)
+    env = GridWorldEnv(train, step_limit=10)
+    with ros_envs('generator-local', DEFAULT_DATA, train, RLConfig(step_limit=10), 0) as [client]:
+        assert client.observation_space == env.observation_space
+        assert client.action_space == env.action_space
+        obs, _ = client.reset()
+        assert client.observation_space.contains(obs), obs
+        for action in range(client.action_space.n):
+            obs, _, terminated, truncated, _ = client.step(action)
+            assert client.observation_space.contains(obs), obs
+            if terminated or truncated:
+                break

@@ -239,13 +239,18 @@ def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
 
 def test_readme_launch_lines_use_the_declared_arguments():
     """
-    Check the README's `ros2 launch` lines against the launch files' arguments.
+    Check the documentation's `ros2 launch` lines against the launch files' arguments.
 
-    Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README passes
-    only arguments X declares (and the README shows both launch files).
+    Every `ros2 launch spatial_grounding_ros X.launch.py ...` line of the README and the docs/
+    pages passes only arguments X declares (and the README shows both launch files).
     """
+    readme = (REPO / 'README.md').read_text()
+    pages = [readme, *(p.read_text() for p in sorted((REPO / 'docs').glob('*.md')))]
+    assert {'grounder.launch.py', 'demo.launch.py'} <= set(
+        re.findall(r'ros2 launch spatial_grounding_ros (\S+\.launch\.py)', readme)
+    )
     seen = set()
-    for line in (REPO / 'README.md').read_text().splitlines():
+    for line in '\n'.join(pages).splitlines():
         match = re.match(r'ros2 launch spatial_grounding_ros (\S+\.launch\.py)(.*)', line)
         if not match:
             continue

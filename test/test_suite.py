@@ -83,8 +83,8 @@ def test_suite_json_cli_prints_one_object():
 @pytest.mark.parametrize(
     'args,needle',
     [
-        (('--sizes', '4'), 'sizes must be >= 5'),
-        (('--n', '0'), '--n must be at least 1'),
+        (('--sizes', '4'), 'argument --sizes: must be at least 5, got 4'),
+        (('--n', '0'), 'argument --n: must be at least 1, got 0'),
         (('--checkpoint', 'isi_t-cnn'), 'entity table'),
     ],
 )

@@ -30,19 +30,11 @@ from std_msgs.msg import Header, String
 from . import convert
 from .processes import executable, stop_processes
 from .qos import LATCHED
+from ..measure import percentiles, rss_mb
 
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
 # run, that share a ROS_DOMAIN_ID never answer each other's requests
 NAMESPACE = f'/bench_{os.getpid()}'
-
-
-def process_rss_mb(pid: int | str = 'self') -> float:
-    """Resident set size of a process now (Linux /proc), in MB."""
-    with open(f'/proc/{pid}/status') as status:
-        for line in status:
-            if line.startswith('VmRSS:'):
-                return int(line.split()[1]) / 1024
-    raise RuntimeError(f'no VmRSS for process {pid}')
 
 
 class LatencyClient(Node):
@@ -120,27 +112,24 @@ def round_trip_latency(
         client.request(instructions[0], timeout=30)  # the first one also waits for the map
         for i in range(warmup):
             client.request(instructions[i % len(instructions)], timeout=10)
-        rss_after_warmup = process_rss_mb(node_process.pid)
+        rss_after_warmup = rss_mb(node_process.pid)
         latencies = []
         for i in range(requests):
             latencies.append(client.request(instructions[i % len(instructions)], timeout=10))
             if progress is not None:
                 progress.update(1)
-        rss_end = process_rss_mb(node_process.pid)
+        rss_end = rss_mb(node_process.pid)
     finally:
         executor.shutdown()
         spinner.join(timeout=5)
         client.destroy_node()
         context.try_shutdown()
         stop_processes(node_process)
-    ms = np.array(latencies) * 1e3
+    timing = percentiles(latencies)
     return {
-        'requests': requests,
+        'requests': timing.pop('n'),
         'map': f'{grid.shape[0]}x{grid.shape[1]}',
-        'p50_ms': float(np.percentile(ms, 50)),
-        'p99_ms': float(np.percentile(ms, 99)),
-        'max_ms': float(ms.max()),
-        'mean_ms': float(ms.mean()),
+        **timing,
         'node_rss_mb_after_warmup': rss_after_warmup,
         'node_rss_mb_end': rss_end,
         'measured': 'instruction published by a client node in the bench process -> '

@@ -42,6 +42,7 @@ from .qos import LATCHED, STREAM
 from ..bags import evaluate_bag
 from ..datasets import DEFAULT_DATA
 from ..entities import PUDDLEWORLD
+from ..options import ranged
 from ..plots import plot_grounding
 
 RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
@@ -365,8 +366,8 @@ def register_cli(sub) -> None:
     d = sub.add_parser(
         'demo', help='gridworld + grounder nodes in a closed loop, recorded to a bag'
     )
-    d.add_argument('--episodes', type=int, default=5)
-    d.add_argument('--seed', type=int, default=7)
+    d.add_argument('--episodes', type=ranged(int, low=1), default=5)
+    d.add_argument('--seed', type=ranged(int, low=0), default=7)
     d.add_argument(
         '--data',
         default=DEFAULT_DATA,

@@ -35,15 +35,29 @@ from std_srvs.srv import Trigger
 from . import convert
 from .processes import stop_processes
 from .qos import LATCHED, STREAM
+from ..env import observation_space
 from ..world import ACTIONS
 
 
 class GridWorldClient(Node):
-    """Subscribes to a gridworld node's topics under `namespace` and counts every message."""
+    """
+    GridWorldEnv's interface on a gridworld node's topics under `namespace`.
 
-    def __init__(self, namespace: str, step_limit: int, timeout: float = 10.0):
+    It subscribes to the node's topics and counts every message; `observation_space` is the
+    space of the episodes the node serves (env.observation_space of them), `action_space` the
+    four moves, as GridWorldEnv's.
+    """
+
+    def __init__(
+        self,
+        namespace: str,
+        step_limit: int,
+        observation_space: spaces.Dict,
+        timeout: float = 10.0,
+    ):
         super().__init__('gridworld_client', namespace=namespace)
         self.step_limit, self.timeout = step_limit, timeout
+        self.observation_space = observation_space
         self.counts = {'map': 0, 'instruction': 0, 'pose': 0, 'reward': 0, 'terminated': 0}
         self.map_msg: OccupancyGrid | None = None
         self.instruction = ''
@@ -166,7 +180,8 @@ def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
     started_here = not rclpy.ok()
     if started_here:
         rclpy.init()
-    client = GridWorldClient(namespace, step_limit, timeout=60.0)
+    space = observation_space(train.grids.shape[1:], len(train.entities), train.instructions)
+    client = GridWorldClient(namespace, step_limit, space, timeout=60.0)
     try:
         yield [client]
     finally:

@@ -36,8 +36,9 @@ from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .qos import LATCHED, STREAM
 from .. import world
-from ..datasets import DEFAULT_DATA, SPLITS, TASKS
+from ..datasets import DEFAULT_DATA, SPLITS
 from ..env import GENERATED, GridWorldEnv, load_episodes
+from ..tasks import TASKS
 
 NODE_NAME = 'gridworld'
 
