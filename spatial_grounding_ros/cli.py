@@ -195,7 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
         '--ablation',
         action='store_true',
         help='only the clear-references ablation: t-RNet on pw, each change of the '
-        'recipe off in turn (results/ablation.*, about 25 minutes)',
+        'recipe off in turn (results/ablation.*, about 35 minutes)',
     )
     r.set_defaults(func=cmd_reproduce)
 
