@@ -111,6 +111,7 @@ def size_latency(grounder: Grounder, size: int, args, reference_s_per_cell: floa
     model = grounder.model
     z1 = torch.randn(1, size, size)
     code = torch.randn(1, model.head.code_size)  # what an instruction gives the head
+    far = torch.randn(1, size, size) if model.head.inputs == 3 else None  # the far relation's
 
     def new_instruction():
         grounder.text_codes.clear()
@@ -121,9 +122,9 @@ def size_latency(grounder: Grounder, size: int, args, reference_s_per_cell: floa
 
     row = {'map': f'{size}x{size}', 'instruction': text}
     # the output network alone: as the model runs it (channels-last, tiled), and plain
-    row['head'] = run(lambda: model.head(z1, code), 'head')
+    row['head'] = run(lambda: model.head(z1, code, far), 'head')
     row['head_plain'] = run(
-        lambda: model.head(z1, code, layout=torch.contiguous_format), 'plain head'
+        lambda: model.head(z1, code, far, layout=torch.contiguous_format), 'plain head'
     )
     reset_peak_rss()
     row['ground_cached'] = run(lambda: grounder.ground(grid, text), 'ground, cached')

@@ -261,6 +261,7 @@ class OutputHead(nn.Module):
         super().__init__()
         self.gradient_cells = gradient_cells
         self.axial, self.film = axial and len(channels) > 0, film and len(channels) > 0
+        self.inputs = inputs  # Z1, Z2 and, with t-RNet's far relation, its map
         sizes = [inputs, *channels, 1]
         # with axial views the second layer also reads AXIAL_VIEWS maps per channel of the first
         self.convs = nn.ModuleList(
