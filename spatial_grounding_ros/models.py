@@ -98,8 +98,11 @@ class ModelConfig:
 
 
 def head_code_size(cfg: ModelConfig) -> int:
-    """What the instruction gives the output network: 3 gradient coefficients, and with
-    head_text a scale and a shift per first-layer channel."""
+    """
+    Return the size of what the instruction gives the output network.
+
+    3 gradient coefficients, and with head_text a scale and a shift per first-layer channel.
+    """
     return 3 + (2 * cfg.head[0] if cfg.head_text and cfg.head else 0)
 
 
@@ -415,11 +418,11 @@ FAR_POSITION, FAR_LOG_COST, FAR_REACH = 0.0, -3.0, 12
 
 def distance_max(x: torch.Tensor, cost, reach: int = FAR_REACH) -> torch.Tensor:
     """
-    Max over cells j within `reach` rows and columns of x(j) - cost * |i - j|^2, per
-    channel of x (B, C, H, W); `cost` broadcasts against (C, H, W).
+    Return, per channel of x (B, C, H, W), the max over cells j of x(j) - cost d^2.
 
-    A max-plus distance transform. The squared distance splits into rows and columns, so it
-    runs as two passes over 2R+1 shifts, O(HWR).
+    d is the distance |i - j| of cells, j within `reach` rows and columns of i; `cost`
+    broadcasts against (C, H, W). A max-plus distance transform: the squared distance splits
+    into rows and columns, so it runs as two passes over 2R+1 shifts, O(HWR).
     """
     limit = reach
     for dim in (2, 3):
@@ -616,7 +619,7 @@ class TRNet(nn.Module):
         }
 
     def far_table(self, text: tuple, kinds: torch.Tensor) -> torch.Tensor:
-        """The far relation's score of each (kind_i, kind_j) of `kinds`: (B, K, K)."""
+        """Score each (kind_i, kind_j) of `kinds` with the far relation: (B, K, K)."""
         embed = self.phi.embed.weight
         b, n = text[0].shape[0], len(kinds)
         phi_i = embed[kinds].repeat_interleave(n, dim=0)  # (K * K, k)
@@ -631,14 +634,15 @@ class TRNet(nn.Module):
 
     def far_map(self, grids: torch.Tensor, kinds: torch.Tensor, table: torch.Tensor):
         """
-        The far relation map (B, H, W): max over cells j within FAR_REACH rows and columns of
-        far(kind_i, kind_j) - cost * |i - j|^2.
+        Return the far relation map (B, H, W): per cell i, max over j of far - cost d^2.
 
-        A cell's own kind a is at distance 0, so far(a, a) is its floor, and a kind k can raise
-        it only where far(a, k) - cost * d^2 > far(a, a): only such kinds are measured, and
-        only as far as that gain reaches (exact, and a fraction of the work on a large map).
-        Per kind k, distance_max of the kind's cells (0 there, -inf elsewhere) is -cost times
-        the squared distance to the nearest k, to which each cell adds its row of the table.
+        j runs over the cells within FAR_REACH rows and columns of i, d = |i - j|, and far is
+        the far relation's score of (kind_i, kind_j), from `table`. A cell's own kind a is at
+        distance 0, so far(a, a) is its floor, and a kind k can raise it only where
+        far(a, k) - cost * d^2 > far(a, a): only such kinds are measured, and only as far as
+        that gain reaches (exact, and a fraction of the work on a large map). Per kind k,
+        distance_max of the kind's cells (0 there, -inf elsewhere) is -cost times the squared
+        distance to the nearest k, to which each cell adds its row of the table.
         """
         b, h, w = grids.shape
         n = len(kinds)
@@ -716,7 +720,7 @@ class TCNN(nn.Module):
     def __init__(self, cfg: ModelConfig):
         super().__init__()
         if cfg.far:
-            raise ValueError('far relations are a relation network\'s; t-CNN has none')
+            raise ValueError("far relations are a relation network's; t-CNN has none")
         self.cfg = cfg
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)

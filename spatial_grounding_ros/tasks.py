@@ -93,7 +93,11 @@ TASKS = {
         ),
         # both PuddleWorld modes trained together: the node's default checkpoint
         Task(
-            'pw', data='puddleworld', pw_modes=('local', 'global'), generator_mode='training', **_PW
+            'pw',
+            data='puddleworld',
+            pw_modes=('local', 'global'),
+            generator_mode='training',
+            **_PW,
         ),
         Task(
             'isi',

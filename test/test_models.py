@@ -16,9 +16,9 @@ from spatial_grounding_ros.models import (
     build_model,
     FAR_REACH,
     head_code_size,
-    present_kinds,
     ModelConfig,
     MODELS,
+    present_kinds,
     relation_param_count,
     relative_positions,
     shifted,
@@ -170,7 +170,7 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
     model(grids, tokens).sum().backward()
     assert model.head.convs[0].weight.grad[:, 2].abs().sum() > 0
     assert model.far_log_cost.grad != 0
-    with pytest.raises(ValueError, match="t-CNN has none"):
+    with pytest.raises(ValueError, match='t-CNN has none'):
         build_model('t-cnn', ModelConfig(vocab_size=6, far=True))
 
 
@@ -314,6 +314,9 @@ def test_word_matmuls_equal_per_pair_weights():
         z1 = r.max(-1).values.view(b, h, w)
         torch.testing.assert_close(aux['relation_map'], z1, rtol=1e-4, atol=1e-5)
         torch.testing.assert_close(
-            values, model.head(z1, model.decoder(mean)[:, -model.head.code_size:]), rtol=1e-4, atol=1e-5
+            values,
+            model.head(z1, model.decoder(mean)[:, -model.head.code_size:]),
+            rtol=1e-4,
+            atol=1e-5,
         )
         assert z1.std() > 0.01  # not a degenerate map that any computation would match
