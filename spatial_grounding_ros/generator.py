@@ -68,8 +68,7 @@ MODES = {
     'local': ('referent', 'one-step', 'two-step', 'combined', 'closest', 'row-col', 'between'),
     'global': ('extreme', 'extreme-offset'),
     'mixed': FAMILIES,
-    # the default's training mix: closest and row-col twice, the two it learns slowest (10
-    # epochs: closest 65% -> 90%, row-col 69% -> 77% at 10x10)
+    # the default's training mix: closest and row-col twice, the two it learns slowest
     'training': FAMILIES + ('closest', 'row-col'),
 }
 

@@ -97,13 +97,13 @@ class ModelConfig:
         return cls(**{**d, 'mlp': tuple(d['mlp']), 'head': tuple(d['head'])})
 
 
-def head_code_size(cfg: ModelConfig) -> int:
+def head_code_size(channels: tuple, film: bool) -> int:
     """
-    Return the size of what the instruction gives the output network.
+    Return the size of what the instruction gives an output network of `channels`.
 
-    3 gradient coefficients, and with head_text a scale and a shift per first-layer channel.
+    3 gradient coefficients, and with `film` a scale and a shift per first-layer channel.
     """
-    return 3 + (2 * cfg.head[0] if cfg.head_text and cfg.head else 0)
+    return 3 + (2 * channels[0] if film and channels else 0)
 
 
 def relation_param_count(cfg: ModelConfig) -> int:
@@ -113,7 +113,8 @@ def relation_param_count(cfg: ModelConfig) -> int:
     (2k+1)*10 + 10*10 + 10*1 + 3 = 263 for k = 7, 383 for k = 13 (without head_text).
     """
     sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
-    return sum(a * b for a, b in zip(sizes[:-1], sizes[1:])) + head_code_size(cfg)
+    weights = sum(a * b for a, b in zip(sizes[:-1], sizes[1:]))
+    return weights + head_code_size(cfg.head, cfg.head_text)
 
 
 class TextEncoder(nn.Module):
@@ -265,6 +266,8 @@ class OutputHead(nn.Module):
         self.gradient_cells = gradient_cells
         self.axial, self.film = axial and len(channels) > 0, film and len(channels) > 0
         self.inputs = inputs  # Z1, Z2 and, with t-RNet's far relation, its map
+        # entries of the instruction's code this head reads: beta, then the FiLM's
+        self.code_size = head_code_size(channels, film)
         sizes = [inputs, *channels, 1]
         # with axial views the second layer also reads AXIAL_VIEWS maps per channel of the first
         self.convs = nn.ModuleList(
@@ -276,11 +279,6 @@ class OutputHead(nn.Module):
         self.slope = slope
         # maps of more than tile x tile cells run in tiles of that side (memory: see forward)
         self.tile = 256
-
-    @property
-    def code_size(self) -> int:
-        """Entries of the instruction's code this head reads: beta, then the FiLM's."""
-        return 3 + (2 * self.convs[0].out_channels if self.film else 0)
 
     def forward(
         self, z1: torch.Tensor, code: torch.Tensor, far: torch.Tensor | None = None, layout=None
@@ -424,16 +422,16 @@ def distance_max(x: torch.Tensor, cost, reach: int = FAR_REACH) -> torch.Tensor:
     broadcasts against (C, H, W). A max-plus distance transform: the squared distance splits
     into rows and columns, so it runs as two passes over 2R+1 shifts, O(HWR).
     """
-    limit = reach
     for dim in (2, 3):
-        n, reach = x.shape[dim], min(limit, x.shape[dim] - 1)
+        n = x.shape[dim]
+        r = min(reach, n - 1)
         pad = [0, 0, 0, 0]
-        pad[(3 - dim) * 2:(3 - dim) * 2 + 2] = [reach, reach]
+        pad[(3 - dim) * 2:(3 - dim) * 2 + 2] = [r, r]
         padded = F.pad(x, pad, value=float('-inf'))
         out = x
-        for d in range(-reach, reach + 1):
+        for d in range(-r, r + 1):
             if d:
-                out = torch.maximum(out, padded.narrow(dim, reach + d, n) - cost * d * d)
+                out = torch.maximum(out, padded.narrow(dim, r + d, n) - cost * d * d)
         x = out
     return x
 
@@ -618,6 +616,20 @@ class TRNet(nn.Module):
             'far': self.far_table(text, kinds) if self.cfg.far else None,
         }
 
+    def kind_rows(self, grids: torch.Tensor, kinds: torch.Tensor):
+        """
+        Return each entity kind's row in a table over `kinds` (-1: absent), and each cell's.
+
+        The cells' rows are (B, H*W); a grid kind the table lacks is an error.
+        """
+        row = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
+        row[kinds] = torch.arange(len(kinds), device=grids.device)
+        cells = row[grids].flatten(1)
+        if cells.min() < 0:
+            missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
+            raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
+        return row, cells
+
     def far_table(self, text: tuple, kinds: torch.Tensor) -> torch.Tensor:
         """Score each (kind_i, kind_j) of `kinds` with the far relation: (B, K, K)."""
         embed = self.phi.embed.weight
@@ -646,12 +658,7 @@ class TRNet(nn.Module):
         """
         b, h, w = grids.shape
         n = len(kinds)
-        row = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
-        row[kinds] = torch.arange(n, device=grids.device)
-        rows = row[grids].flatten(1)  # (B, H*W): each cell's row of the table
-        if rows.min() < 0:
-            missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
-            raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
+        _, rows = self.kind_rows(grids, kinds)  # (B, H*W): each cell's row of the table
         table = table.expand(b, -1, -1)
         scores = table.gather(1, rows[..., None].expand(-1, -1, n))  # (B, H*W, K)
         floor = table.diagonal(dim1=1, dim2=2).gather(1, rows)  # far(a, a) per cell
@@ -678,14 +685,9 @@ class TRNet(nn.Module):
         relations = code['relations'].expand(b, -1, -1)  # (B, Ki * Kj, 8)
         # each entity kind's table row as a centre (i * Kj) and as a neighbour (j); -1: absent
         n_kinds_j = len(kinds) + 1
-        row_i = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
-        row_i[kinds] = torch.arange(len(kinds), device=grids.device)
+        row_i, centre = self.kind_rows(grids, kinds)  # (B, N)
         row_j = row_i.clone()
         row_j[self.phi.off_map] = len(kinds)
-        centre = row_i[grids].flatten(1)  # (B, N)
-        if centre.min() < 0:
-            missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
-            raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
         centre *= n_kinds_j
         # one gather per offset, from that offset's column of the table
         rows = [
@@ -725,7 +727,8 @@ class TCNN(nn.Module):
         self.phi = EntityEncoder(cfg)
         self.text = TextEncoder(cfg)
         # a 3x3 kernel per embedding dimension, then the head's code: 66 for k = 7
-        self.decoder = nn.Linear(cfg.hidden, 9 * cfg.embed_dim + head_code_size(cfg))
+        kernel = 9 * cfg.embed_dim
+        self.decoder = nn.Linear(cfg.hidden, kernel + head_code_size(cfg.head, cfg.head_text))
         self.head = build_head(cfg)
 
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):

@@ -123,7 +123,7 @@ def test_axial_head_runs_on_any_map_and_learns_through_the_views(shape):
 def test_far_relation_and_head_text_learn_and_run_on_any_map(name):
     cfg = ModelConfig(vocab_size=5, axial=True, far=True, head_text=True)
     model = build_model(name, cfg)
-    assert head_code_size(cfg) == 3 + 2 * 8 == model.head.code_size
+    assert head_code_size(cfg.head, cfg.head_text) == 3 + 2 * 8 == model.head.code_size
     assert model.decoder.out_features == 263 + 16
     assert model.head.convs[0].in_channels == 3 and model.head.convs[1].in_channels == 8 * 7
     for shape in ((1, 6), (9, 14)):
