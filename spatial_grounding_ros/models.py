@@ -414,26 +414,40 @@ AXIAL_VIEWS = 6
 FAR_POSITION, FAR_LOG_COST, FAR_REACH = 0.0, -3.0, 12
 
 
-def distance_max(x: torch.Tensor, cost, reach: int = FAR_REACH) -> torch.Tensor:
-    """
-    Return, per channel of x (B, C, H, W), the max over cells j of x(j) - cost d^2.
+# a squared distance past any reach: "no such cell within reach" (int16 leaves room for the
+# two passes' additions)
+FAR_BEYOND = 1 << 14
+# cells per chunk of kinds in far_map: one large map's planes at a time stay in cache, while the
+# small maps of a training batch take all kinds in one go
+FAR_CHUNK_CELLS = 1 << 18
 
-    d is the distance |i - j| of cells, j within `reach` rows and columns of i; `cost`
-    broadcasts against (C, H, W). A max-plus distance transform: the squared distance splits
-    into rows and columns, so it runs as two passes over 2R+1 shifts, O(HWR).
+
+def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
     """
-    for dim in (2, 3):
-        n = x.shape[dim]
+    Return each cell's squared distance to the nearest marked cell, per map of marks (..., H, W).
+
+    Only marks within `reach` rows and columns count; FAR_BEYOND or more where none does. The
+    squared distance splits into rows and columns, so it is two exact passes of 2R+1 shifts,
+    O(HWR). It depends on the grid alone (no gradient), so it runs in int16: a 512x512 plane
+    is 512 KB. Small planes take each pass as one op over all shifts (per-op costs dominate
+    there); large ones shift in place, which stays in cache.
+    """
+    d = torch.full(marks.shape, FAR_BEYOND, dtype=torch.int16, device=marks.device)
+    d.masked_fill_(marks, 0)
+    for dim in (-1, -2):
+        n = d.shape[dim]
         r = min(reach, n - 1)
-        pad = [0, 0, 0, 0]
-        pad[(3 - dim) * 2:(3 - dim) * 2 + 2] = [r, r]
-        padded = F.pad(x, pad, value=float('-inf'))
-        out = x
-        for d in range(-r, r + 1):
-            if d:
-                out = torch.maximum(out, padded.narrow(dim, r + d, n) - cost * d * d)
-        x = out
-    return x
+        padded = F.pad(d, [r, r] if dim == -1 else [0, 0, r, r], value=FAR_BEYOND)
+        if d.numel() * (2 * r + 1) <= FAR_CHUNK_CELLS * 2:
+            squares = (torch.arange(-r, r + 1, device=d.device) ** 2).to(d.dtype)
+            d = (padded.unfold(dim, 2 * r + 1, 1) + squares).amin(-1)
+            continue
+        step = torch.empty_like(d)
+        for s in range(1, r + 1):
+            for start in (r - s, r + s):
+                torch.add(padded.narrow(dim, start, n), s * s, out=step)
+                torch.minimum(d, step, out=d)
+    return d
 
 
 def build_head(cfg: ModelConfig) -> OutputHead:
@@ -494,16 +508,21 @@ class TRNet(nn.Module):
         weights: list[torch.Tensor], x: torch.Tensor, attention: torch.Tensor | None
     ) -> torch.Tensor:
         """
-        Compute r = W3 tanh(W2 tanh(W1 x)) over pairs x (B, N, 8, 2k+1).
+        Compute r = W3 tanh(W2 tanh(W1 x)) over pairs x (B, N, P, 2k+1).
 
         Without attention the weights are one set per map, (B, out, in). With attention the
         pair (i, j) uses W_ij = sum_k alpha_ij(k) W(k), the weights decoded from each word k
-        (B, L, out, in); W_ij x = sum_k alpha_ij(k) (W(k) x), so each layer is one matmul per
-        word and a weighted sum, never a weight matrix per pair (3x faster, same result).
+        (B, L, out, in). When each row's P columns differ in attention (a map's 8 neighbours),
+        W_ij x = sum_k alpha_ij(k) (W(k) x): one matmul per word and a weighted sum, never a
+        weight matrix per pair (3x faster, same result). When they share it (a table row's
+        offsets: attention (B, N, 1, L)), each row's weights are mixed once instead.
         """
         for n, w in enumerate(weights):
             if attention is None:
                 x = torch.einsum('bnpi,boi->bnpo', x, w)
+            elif attention.shape[2] == 1:
+                mixed = torch.einsum('bnl,bloi->bnoi', attention[:, :, 0], w)
+                x = torch.einsum('bnpi,bnoi->bnpo', x, mixed)
             else:
                 x = (attention.unsqueeze(-1) * torch.einsum('bnpi,bloi->bnplo', x, w)).sum(-2)
             if n < len(weights) - 1:
@@ -522,10 +541,14 @@ class TRNet(nn.Module):
 
         Returns r (B, M, 8) and the attention over words (B, M, 8, L) (None without it). The
         M rows are a map's cells (reference) or a table's kind pairs (fast): the same code.
-        `rel`: position codes (P,) for P columns of phi_j (default: the 8 offsets').
+        `rel`: position codes (P,) for P columns of phi_j (default: the 8 offsets'); phi_j
+        may have one column for all P (a table's), and the attention then has one too.
         """
         words, mask, mean = text  # (B, L, 30), (B, L), (B, 30)
-        b, m, n_nbrs, k = phi_j.shape
+        if rel is None:
+            rel = relative_positions(self.cfg.radius)
+        b, m, _, k = phi_j.shape
+        n_nbrs = len(rel)
         attention = None
         if self.attention_on:
             # alpha_ij(k) ~ exp(h(k)^T A [phi_i; phi_j]); the score splits into an i part and
@@ -541,10 +564,11 @@ class TRNet(nn.Module):
             weights = self.split_params(self.decoder(words))  # (B, L, out, in) per layer
         else:
             weights = self.split_params(self.decoder(mean))  # (B, out, in) per layer
-        if rel is None:
-            rel = relative_positions(self.cfg.radius)
         rel = rel.to(phi_j.device).expand(b, m, -1).unsqueeze(-1)
-        x = torch.cat([phi_i.unsqueeze(2).expand(-1, -1, n_nbrs, -1), phi_j, rel], -1)
+        x = torch.cat(
+            [phi_i.unsqueeze(2).expand(-1, -1, n_nbrs, -1), phi_j.expand(-1, -1, n_nbrs, -1), rel],
+            -1,
+        )
         return self.relation_mlp(weights, x, attention), attention
 
     def forward(
@@ -605,15 +629,23 @@ class TRNet(nn.Module):
         phi_i = embed[kinds].repeat_interleave(len(kinds_j), dim=0)  # (Ki * Kj, k)
         phi_j = embed[kinds_j].repeat(len(kinds), 1)
         text = self.text(tokens)
+        # the far relation's position is a ninth column of the same rows: one pass scores both
+        # (far_table's (kind_i, kind_j) are the rows whose j is not off the map)
+        rel = relative_positions(self.cfg.radius)
+        if self.cfg.far:
+            rel = torch.cat([rel, torch.tensor([FAR_POSITION])])
         r, attention = self.relations(
-            phi_i.expand(b, -1, -1), phi_j[None, :, None].expand(b, -1, n_nbrs, -1), text
+            phi_i.expand(b, -1, -1), phi_j[None, :, None].expand(b, -1, -1, -1), text, rel
         )
+        far = None
+        if self.cfg.far:
+            far = r[..., n_nbrs].unflatten(1, (len(kinds), len(kinds_j)))[..., :-1]
         return {
             'kinds': kinds,
-            'relations': r,
+            'relations': r[..., :n_nbrs],
             'attention': None if attention is None else attention[:, :, 0],
             'head': self.decoder(text[2])[:, -self.head.code_size:],
-            'far': self.far_table(text, kinds) if self.cfg.far else None,
+            'far': far,
         }
 
     def kind_rows(self, grids: torch.Tensor, kinds: torch.Tensor):
@@ -652,30 +684,40 @@ class TRNet(nn.Module):
         the far relation's score of (kind_i, kind_j), from `table`. A cell's own kind a is at
         distance 0, so far(a, a) is its floor, and a kind k can raise it only where
         far(a, k) - cost * d^2 > far(a, a): only such kinds are measured, and only as far as
-        that gain reaches (exact, and a fraction of the work on a large map). Per kind k,
-        distance_max of the kind's cells (0 there, -inf elsewhere) is -cost times the squared
-        distance to the nearest k, to which each cell adds its row of the table.
+        that gain reaches (exact, and a fraction of the work on a large map). Per kind k, each
+        cell adds its row's far(a, k) to -cost times its squared distance to the nearest k.
         """
         b, h, w = grids.shape
-        n = len(kinds)
         _, rows = self.kind_rows(grids, kinds)  # (B, H*W): each cell's row of the table
         table = table.expand(b, -1, -1)
-        scores = table.gather(1, rows[..., None].expand(-1, -1, n))  # (B, H*W, K)
-        floor = table.diagonal(dim1=1, dim2=2).gather(1, rows)  # far(a, a) per cell
+        out = table.diagonal(dim1=1, dim2=2).gather(1, rows).view(b, h, w)  # far(a, a)
         cost = self.far_log_cost.exp()
-        present = torch.bincount(rows.flatten(), minlength=n) > 0
+        present = torch.bincount(rows.flatten(), minlength=len(kinds)) > 0
         gain = (table - table.diagonal(dim1=1, dim2=2)[..., None])[:, present]  # (B, A, K)
         gain = gain.detach().amax(dim=(0, 1))  # per kind k, over the kinds a present
         useful = ((gain > 0) & present).nonzero().flatten()
-        out = floor.view(b, h, w)
-        if len(useful):
-            reach = int(torch.sqrt(gain[useful].max() / cost.detach()))
-            marks = torch.zeros(b, len(useful), h, w, device=grids.device).masked_fill_(
-                grids[:, None] != kinds[useful][None, :, None, None], float('-inf')
-            )
-            nearest = distance_max(marks, cost, min(reach, FAR_REACH))  # (B, U, H, W)
-            useful_scores = scores[..., useful].transpose(1, 2).reshape(b, -1, h, w)
-            out = torch.maximum(out, (useful_scores + nearest).amax(1))
+        if not len(useful):
+            return out
+        top = gain[useful].max()
+        reach = min(int(torch.sqrt(top / cost.detach())), FAR_REACH)
+        # a cell with no k within reach scores at most floor + gain - cost * FAR_BEYOND: below
+        # its floor unless the gain is that large, so only then must it be masked out
+        masked = bool(top >= cost.detach() * FAR_BEYOND)
+        # each cell's far(a, k) for the useful kinds k: one lookup in the B * K rows of the
+        # tables, (U, B, H, W)
+        n = len(kinds)
+        lookup = table[:, :, useful].permute(2, 0, 1).reshape(len(useful), b * n)
+        cells = (rows + torch.arange(b, device=grids.device)[:, None] * n).flatten()
+        scores = lookup.index_select(1, cells).view(len(useful), b, h, w)
+        chunk = max(1, FAR_CHUNK_CELLS // (b * h * w))
+        for start in range(0, len(useful), chunk):
+            ks = kinds[useful[start:start + chunk]]
+            with torch.no_grad():
+                dist = squared_distances(grids[:, None] == ks[None, :, None, None], reach)
+            near = scores[start:start + chunk].transpose(0, 1).addcmul(dist, -cost)
+            if masked:
+                near = near.masked_fill(dist >= FAR_BEYOND, float('-inf'))
+            out = torch.maximum(out, near.amax(1) if len(ks) > 1 else near[:, 0])
         return out
 
     def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):

@@ -14,6 +14,7 @@ from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
 from spatial_grounding_ros.models import (
     AxialViews,
     build_model,
+    FAR_BEYOND,
     FAR_REACH,
     head_code_size,
     ModelConfig,
@@ -22,6 +23,7 @@ from spatial_grounding_ros.models import (
     relation_param_count,
     relative_positions,
     shifted,
+    squared_distances,
     TRNet,
 )
 from spatial_grounding_ros.text import Vocabulary
@@ -134,7 +136,7 @@ def test_far_relation_and_head_text_learn_and_run_on_any_map(name):
     assert model.decoder.weight.grad[-16:].abs().sum() > 0
 
 
-@pytest.mark.parametrize('log_cost', [-1.0, -7.0])
+@pytest.mark.parametrize('log_cost', [-1.0, -7.0, -12.0])
 def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
     """
     Brute force: every cell i against every cell j within FAR_REACH rows and columns.
@@ -162,6 +164,20 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
                 if max(abs(rr - r), abs(cc - c)) <= FAR_REACH
             )
             assert float(far[b, r, c]) == pytest.approx(want, abs=1e-5)
+    # and the same gradients, to the table and to the cost, as the maximum over all pairs
+    table = table.clone().requires_grad_()
+    model.far_map(grids, kinds, table).sum().backward()
+    got = table.grad.clone(), model.far_log_cost.grad.clone()
+    table.grad, model.far_log_cost.grad = None, None
+    cells = torch.tensor(list(np.ndindex(5, 16)))
+    offset = cells[:, None] - cells[None]  # (i, j, 2)
+    within = offset.abs().amax(-1) <= FAR_REACH
+    ids = torch.tensor([row[int(k)] for k in grids.flatten()]).view(2, -1)
+    pairs = torch.stack([table[b][ids[b][:, None], ids[b][None]] for b in range(2)])
+    scores = pairs - model.far_log_cost.exp() * (offset**2).sum(-1)
+    scores.masked_fill(~within, float('-inf')).amax(-1).sum().backward()
+    torch.testing.assert_close(got[0], table.grad)
+    torch.testing.assert_close(got[1], model.far_log_cost.grad)
     # the map is a third input of the head, and it learns through it (at a cost low enough
     # that some cell's maximum is another cell's)
     model.train()
@@ -320,3 +336,20 @@ def test_word_matmuls_equal_per_pair_weights():
             atol=1e-5,
         )
         assert z1.std() > 0.01  # not a degenerate map that any computation would match
+
+
+@pytest.mark.parametrize('shape', [(2, 3, 7, 9), (1, 2, 150, 170), (1, 1, 1, 40)])
+def test_squared_distances_to_the_nearest_mark_within_reach(shape):
+    """Both ways of the transform (one op per pass on small planes, shifts on large) are exact."""
+    torch.manual_seed(len(shape) + shape[-1])
+    marks = torch.rand(shape) < 0.02
+    reach = 5
+    got = squared_distances(marks, reach).numpy()
+    h, w = shape[-2:]
+    rows, cols = np.mgrid[0:h, 0:w]
+    for index in np.ndindex(*shape[:-2]):
+        want = np.full((h, w), FAR_BEYOND)
+        for r, c in zip(*np.nonzero(marks[index].numpy())):
+            near = (abs(rows - r) <= reach) & (abs(cols - c) <= reach)
+            want = np.where(near, np.minimum(want, (rows - r) ** 2 + (cols - c) ** 2), want)
+        assert np.array_equal(np.minimum(got[index], FAR_BEYOND), want)
