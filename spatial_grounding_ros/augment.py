@@ -5,7 +5,7 @@
 # https://opensource.org/licenses/MIT.
 
 """
-Mirror augmentation.
+Mirror and distractor augmentation.
 
 A map flipped left-right (or top-bottom), with the direction words of its instruction swapped, is
 another correct example: the grid MDP is symmetric under both flips, so the flipped value map is
@@ -21,9 +21,13 @@ to"); NOT_DIRECTIONS keeps those as they are.
 from __future__ import annotations
 
 import numpy as np
+import torch
 
 from .datasets import GroundingSet
+from .models import distractor_kind_ids
 from .text import tokenize
+
+FREE_KIND = 0  # grass (PuddleWorld), the empty board (ISI): where distractors may stand
 
 
 def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:
@@ -225,3 +229,34 @@ def with_mirrors(data: GroundingSet) -> GroundingSet:
             image = mirror(image, axis + 1)  # map axis -> axis of the (N, H, W) arrays
         images.append(image)
     return GroundingSet.concat(data.name, [data, *images])
+
+
+def add_distractors(
+    model, grids: torch.Tensor, goals: torch.Tensor, most: int, rng: np.random.Generator
+) -> torch.Tensor:
+    """
+    Put 0..`most` distractor objects on free cells of each map; return the new grids.
+
+    A distractor is of one of the model's distractor kinds (ModelConfig.distractor_kinds),
+    whose embedding rows are redrawn from N(0, 1) here, at every step, so no draw is ever
+    learned: the model learns to pass over objects it does not know. They stand on free cells
+    other than the goal, so the value maps stay true (as the robustness study's unseen objects,
+    which are other rows, held out). `rng` alone draws everything: processes of one data-parallel
+    run, given the same whole batch and generator, agree.
+    """
+    ids = np.array(distractor_kind_ids(model.cfg))
+    if most > len(ids):
+        raise ValueError(
+            f'{most} distractors need as many distractor kinds; the model has {len(ids)}'
+        )
+    weight = model.phi.embed.weight
+    with torch.no_grad():
+        weight[ids] = torch.from_numpy(rng.standard_normal((len(ids), weight.shape[1]))).to(weight)
+    grids = grids.clone()
+    for grid, goal, k in zip(grids.numpy(), goals.numpy(), rng.integers(0, most + 1, len(grids))):
+        free = grid == FREE_KIND
+        free[tuple(goal)] = False
+        cells = np.flatnonzero(free)
+        k = min(k, len(cells))
+        grid.reshape(-1)[rng.permutation(cells)[:k]] = rng.permutation(ids)[:k]
+    return grids

@@ -73,6 +73,9 @@ class ModelConfig:
     head_text: bool = False
     # entity kinds held out of training (the robustness study's unseen objects), see EntityEncoder
     unseen_kinds: int = 10
+    # kinds after those whose embeddings training redraws at every step: its distractor objects
+    # (TrainConfig.distractors), so a model learns to pass over things it does not know
+    distractor_kinds: int = 0
 
     # fields added after checkpoints were shipped, with the value those checkpoints had
     LATER_FIELDS = {
@@ -81,6 +84,7 @@ class ModelConfig:
         'unseen_kinds': 0,
         'head_text': False,
         'far': False,
+        'distractor_kinds': 0,
     }
 
     def to_dict(self) -> dict:
@@ -143,6 +147,12 @@ def unseen_kind_ids(n_entities: int, count: int) -> list[int]:
     return list(range(n_entities + 1, n_entities + 1 + count))
 
 
+def distractor_kind_ids(cfg: ModelConfig) -> list[int]:
+    """Grid values of the distractor kinds: after the unseen ones, never one of theirs."""
+    first = cfg.n_entities + 1 + cfg.unseen_kinds
+    return list(range(first, first + cfg.distractor_kinds))
+
+
 class EntityEncoder(nn.Module):
     """
     phi.
@@ -155,7 +165,9 @@ class EntityEncoder(nn.Module):
     that is never looked up gets no gradient, and Adam leaves it where it was), so they stay
     at nn.Embedding's own initial distribution, N(0, 1), drawn from a generator of their own
     (UNSEEN_ROWS_SEED). Their own generator keeps the global random stream, and with it the
-    initialisation of everything else, as it was before these rows existed.
+    initialisation of everything else, as it was before these rows existed. The
+    `cfg.distractor_kinds` rows after them are training's distractors, redrawn from the same
+    N(0, 1) at every step (augment.add_distractors): other draws than the unseen rows'.
     """
 
     def __init__(self, cfg: ModelConfig, pad: int = 1):
@@ -167,8 +179,9 @@ class EntityEncoder(nn.Module):
             cfg.embed_dim,
             generator=torch.Generator().manual_seed(UNSEEN_ROWS_SEED),
         )
-        self.embed.weight = nn.Parameter(torch.cat([self.embed.weight.data, unseen]))
-        self.embed.num_embeddings += cfg.unseen_kinds
+        distractors = torch.zeros(cfg.distractor_kinds, cfg.embed_dim)  # redrawn each step
+        self.embed.weight = nn.Parameter(torch.cat([self.embed.weight.data, unseen, distractors]))
+        self.embed.num_embeddings += cfg.unseen_kinds + cfg.distractor_kinds
 
     def with_unseen_rows(self, weight: torch.Tensor) -> torch.Tensor:
         """

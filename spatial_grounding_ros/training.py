@@ -26,7 +26,7 @@ import torch.nn.functional as F
 from tqdm import tqdm
 
 from . import distributed, tasks, world
-from .augment import with_mirrors
+from .augment import add_distractors, with_mirrors
 from .checkpoints import save_checkpoint
 from .datasets import (
     GroundingSet,
@@ -43,6 +43,10 @@ from .text import Vocabulary
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
 SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
+
+
+# at most as many distractors a map as the robustness study's unseen objects
+MAX_DISTRACTORS = 10
 
 
 @dataclass
@@ -80,6 +84,13 @@ class TrainConfig:
     )
     mirrors: bool | None = option(
         None, "add mirrored copies of the human training examples (default: the task's)"
+    )
+    distractors: int = option(
+        0,
+        'up to this many distractor objects on free cells of each training map, of kinds whose '
+        'embeddings are redrawn from N(0, 1) every step (0: none)',
+        low=0,
+        high=MAX_DISTRACTORS,
     )
     goal_weight: float | None = option(
         None, "weight of the goal-cell cross-entropy beside the MSE (default: the task's)",
@@ -249,6 +260,8 @@ def train_supervised(
             f'--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld'
         )
     model_options = {**tasks.task(task).model, **model_options}
+    if tc.distractors:
+        model_options['distractor_kinds'] = tc.distractors
     if model_name not in ('t-rnet-attn', 't-rnet'):  # the far relation is a relation network's
         model_options.pop('far', None)
     torch.manual_seed(tc.seed)
@@ -293,6 +306,7 @@ def train_supervised(
         opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final
     )
     rng = np.random.default_rng(tc.seed)
+    distractor_rng = np.random.default_rng([tc.seed, 1])  # the same draws in every process
     best = ((float('inf'),), None, -1)
     history = []
     start = time.perf_counter()
@@ -321,9 +335,17 @@ def train_supervised(
         for p in rng.permutation(len(plan)):
             part, idx = plan[p]
             grids, tokens, values, goals, _ = encoded[part]
-            idx, weight = distributed.shard(idx, processes)  # weight 1.0: the whole batch, alone
-            idx = torch.from_numpy(idx)
-            pred = trained(grids[idx], _trim(tokens[idx]))
+            batch = torch.from_numpy(idx)
+            batch_grids = grids[batch]
+            if tc.distractors:  # drawn for the whole batch: every process draws the same
+                batch_grids = add_distractors(
+                    model, batch_grids, goals[batch], tc.distractors, distractor_rng
+                )
+            # this process's share (weight 1.0: the whole batch, alone)
+            share, weight = distributed.shard(np.arange(len(idx)), processes)
+            share = torch.from_numpy(share)
+            idx = batch[share]
+            pred = trained(batch_grids[share], _trim(tokens[idx]))
             loss = torch.mean((pred - values[idx]) ** 2)
             if tc.goal_weight:
                 loss = loss + tc.goal_weight * goal_loss(pred, goals[idx], goal_log_scale.exp())

@@ -14,9 +14,12 @@ validation MSE of all epochs; validation holds out whole PuddleWorld worlds.
 import numpy as np
 import pytest
 from spatial_grounding_ros import datasets
+from spatial_grounding_ros.augment import add_distractors
 from spatial_grounding_ros.checkpoints import load_checkpoint
 from spatial_grounding_ros.generator import generate
+from spatial_grounding_ros.models import build_model, distractor_kind_ids, ModelConfig
 from spatial_grounding_ros.training import train_supervised, TrainConfig
+import torch
 
 EPOCHS = 6
 
@@ -120,3 +123,48 @@ def test_training_validates_on_the_world_split(data_dir, tmp_path):
         .header['training_data']
         .endswith(f'({len(train)} train / {len(val)} validation, by world)')
     )
+
+
+def test_distractors_stand_on_free_cells_and_are_redrawn_every_step():
+    cfg = ModelConfig(vocab_size=4, distractor_kinds=4)
+    model = build_model('t-rnet-attn', cfg)
+    ids = distractor_kind_ids(cfg)
+    assert ids[0] == cfg.n_entities + 1 + cfg.unseen_kinds  # after the unseen rows, never them
+    data = generate(40, seed=1, mode='local')
+    grids, goals = torch.from_numpy(data.grids), torch.from_numpy(data.goals)
+    unseen = model.phi.embed.weight[cfg.n_entities + 1:ids[0]].detach().clone()
+    first = add_distractors(model, grids, goals, 4, np.random.default_rng(0))
+    rows = model.phi.embed.weight[ids].detach().clone()
+    again = add_distractors(model, grids, goals, 4, np.random.default_rng(0))
+    assert torch.equal(first, again)  # seeded
+    assert torch.equal(model.phi.embed.weight[ids], rows)
+    add_distractors(model, grids, goals, 4, np.random.default_rng(1))
+    assert not torch.equal(model.phi.embed.weight[ids], rows)  # redrawn
+    assert torch.equal(model.phi.embed.weight[cfg.n_entities + 1:ids[0]], unseen)
+    changed = first != grids
+    assert torch.isin(first[changed], torch.tensor(ids)).all()
+    assert (grids[changed] == 0).all()  # only free cells
+    assert changed.flatten(1).sum(1).max() <= 4 and changed.any()
+    for grid, goal in zip(first, goals):
+        assert grid[tuple(goal)] not in ids
+    with pytest.raises(ValueError, match='5 distractors need as many'):
+        add_distractors(model, grids, goals, 5, np.random.default_rng(0))
+
+
+def test_training_with_distractors_keeps_the_unseen_rows_untouched(tmp_path):
+    tc = TrainConfig(
+        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
+        goal_weight=0.0, distractors=3, threads=1,
+    )
+    path, _ = train_supervised(
+        'pw-local', 't-rnet-attn', '', tmp_path, tc,
+        train_data=generate(60, seed=2, mode='local'), progress=False,
+    )
+    model = load_checkpoint(path).model
+    cfg = model.cfg
+    assert cfg.distractor_kinds == 3
+    fresh = build_model('t-rnet-attn', cfg)
+    unseen = slice(cfg.n_entities + 1, cfg.n_entities + 1 + cfg.unseen_kinds)
+    torch.testing.assert_close(model.phi.embed.weight[unseen], fresh.phi.embed.weight[unseen])
+    trained = slice(0, cfg.n_entities + 1)
+    assert not torch.equal(model.phi.embed.weight[trained], fresh.phi.embed.weight[trained])
