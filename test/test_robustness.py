@@ -90,17 +90,21 @@ def test_robustness_prints_one_json_object_and_writes_the_curves(setup, capsys):
 
 
 def test_minimum_verdict_reads_the_rows():
-    def rows(attn, cnn):
+    def rows(attn, cnn, family=None):
         return [
-            {'task': task, 'model': model, 'noise': 'obs-noise', 'k': 10, 'md_rel': rise}
+            {'task': task, 'checkpoint': f'{family or task}_{model}.pt', 'model': model,
+             'noise': 'obs-noise', 'k': 10, 'md_rel': rise}
             for task in ('pw-local', 'pw-global')
             for model, rise in (('t-rnet-attn', attn), ('t-cnn', cnn))
         ]
 
-    assert 't-cnn): holds.' in minimum_verdict(rows(0.2, 0.5))
+    assert 'per-task checkpoints: holds' in minimum_verdict(rows(0.2, 0.5))
     assert 'does not hold' in minimum_verdict(rows(0.2, 0.1))  # not less than t-cnn's
     assert 'does not hold' in minimum_verdict(rows(0.4, 0.9))  # more than 30%
     assert minimum_verdict(rows(0.2, 0.5)[:2]) is None  # pw-global missing: cannot tell
+    # each family of checkpoints is judged on its own
+    both = minimum_verdict(rows(0.2, 0.5) + rows(1.6, 0.1, family='pw'))
+    assert 'per-task checkpoints: holds' in both and 'pw_* checkpoints: does not hold' in both
 
 
 def test_markdown_table_has_a_line_per_model_and_noise(setup):
@@ -112,7 +116,7 @@ def test_markdown_table_has_a_line_per_model_and_noise(setup):
     ]
     table = markdown_table(rows, seed=3)
     lines = [line for line in table.splitlines() if line.startswith('| pw-local')]
-    assert lines[0] == '| pw-local | t-cnn | obs-noise | 2.00 | 0.500 | 4.00 (+100%) |'
+    assert lines[0] == '| pw-local | a | obs-noise | 2.00 | 0.500 | 4.00 (+100%) |'
     assert len(lines) == len(NOISES) and 'seed 3' in table
 
 
