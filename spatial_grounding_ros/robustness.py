@@ -195,8 +195,10 @@ def reproduce_robustness(
     seed: int = 0,
 ) -> dict:
     """
-    Run the study on the shipped checkpoints `<task>_<model>` of every task, and `pw_<model>`
-    (the node's default family, trained on both PW tasks) on each PW task.
+    Run the study on the shipped checkpoints of every task (study_checkpoints).
+
+    Those are `<task>_<model>`, and on each PW task also `pw_<model>` (the node's default
+    family, trained on both PW tasks).
 
     Writes robustness.json, robustness.md and robustness.png to `out`. A model without a
     shipped checkpoint for a task is listed under "missing", not silently left out.
