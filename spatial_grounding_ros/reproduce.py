@@ -75,6 +75,25 @@ def markdown_table(rows: list[dict]) -> str:
     return '\n'.join(lines) + '\n'
 
 
+def value_map_row(task: str, model_name: str, path: Path, summary: dict, test) -> dict:
+    """Return a trained checkpoint's row of value_map.json: its summary, test metrics, speed."""
+    loaded = load_checkpoint(path)
+    row = {
+        'task': task,
+        'model': model_name,
+        **summary,
+        'test': evaluate(loaded.model, loaded.vocab, test),
+        'checkpoint': path.name,
+    }
+    g1 = torch.from_numpy(test.grids[:1])
+    tokens = torch.from_numpy(loaded.vocab.encode_batch(test.instructions[:512]))
+    row['forward_seconds_one_map'] = forward_latency(loaded.model, g1, tokens[:1])
+    row['forward_seconds_batch_512'] = forward_latency(
+        loaded.model, torch.from_numpy(test.grids[:512]), tokens, repeats=5
+    )
+    return row
+
+
 def reproduce_value_maps(
     data_dir: str,
     out: str,
@@ -93,20 +112,7 @@ def reproduce_value_maps(
             epochs = max(1, int(TASKS[task].epochs * epochs_scale))
             tc = TrainConfig(epochs=epochs, threads=threads)
             path, summary = train_supervised(task, model_name, data_dir, ckpt_dir, tc)
-            loaded = load_checkpoint(path)
-            row = {
-                'task': task,
-                'model': model_name,
-                **summary,
-                'test': evaluate(loaded.model, loaded.vocab, test),
-                'checkpoint': path.name,
-            }
-            g1 = torch.from_numpy(test.grids[:1])
-            tokens = torch.from_numpy(loaded.vocab.encode_batch(test.instructions[:512]))
-            row['forward_seconds_one_map'] = forward_latency(loaded.model, g1, tokens[:1])
-            row['forward_seconds_batch_512'] = forward_latency(
-                loaded.model, torch.from_numpy(test.grids[:512]), tokens, repeats=5
-            )
+            row = value_map_row(task, model_name, path, summary, test)
             if model_name in SHIPPED:
                 PACKAGED_DIR.mkdir(exist_ok=True)
                 shutil.copy(path, PACKAGED_DIR / path.name)

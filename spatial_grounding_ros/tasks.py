@@ -38,6 +38,8 @@ class Task:
     goal_weight: float  # weight of the goal-cell cross-entropy beside the MSE
     # ModelConfig fields of this task's models (empty: the paper's model)
     model: dict = field(default_factory=dict)
+    # distractor objects per training map, at most (augment.add_distractors; 0: none)
+    distractors: int = 0
     # RL episodes of `reproduce-rl` (None: not one of the paper's RL rows)
     rl_episodes: int | None = None
     # the paper's Table 1, test split: model -> (MSE, PQ, MD) of supervised training and

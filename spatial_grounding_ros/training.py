@@ -85,10 +85,10 @@ class TrainConfig:
     mirrors: bool | None = option(
         None, "add mirrored copies of the human training examples (default: the task's)"
     )
-    distractors: int = option(
-        0,
+    distractors: int | None = option(
+        None,
         'up to this many distractor objects on free cells of each training map, of kinds whose '
-        'embeddings are redrawn from N(0, 1) every step (0: none)',
+        "embeddings are redrawn from N(0, 1) every step (0: none; default: the task's)",
         low=0,
         high=MAX_DISTRACTORS,
     )
