@@ -60,7 +60,7 @@ class TrainConfig:
     # only (a separate generated set). Colour is grounded in a few hundred steps, and the
     # relation is learned on it; from a start on all statements training sat at chance.
     warmup_size: int = 20000
-    warmup_epochs: int = 3
+    warmup_epochs: int = 10
     seed: int = 0
     threads: int = 1
 
