@@ -228,19 +228,24 @@ def truth(
     return bool((diff > 0).any())
 
 
-def generate(n: int, seed: int = 0, name: str = 'shapeworld') -> ShapeWorldSet:
+def generate(
+    n: int, seed: int = 0, name: str = 'shapeworld', descriptions: tuple = DESCRIPTIONS
+) -> ShapeWorldSet:
     """
     N examples, half true, half false, in every (description kinds, relation) stratum.
 
     Each example draws its stratum and label first, then scenes and object pairs until a
-    statement of that stratum has that label.
+    statement of that stratum has that label. `descriptions` are the kinds of naming drawn for
+    each side (('colour',): only "a red shape is above a green shape", the curriculum's start).
     """
+    if not set(descriptions) <= set(DESCRIPTIONS) or not descriptions:
+        raise ValueError(f'descriptions {descriptions} are not some of {DESCRIPTIONS}')
     rng = np.random.default_rng(seed)
     relations = list(RELATIONS)
     images, statements, labels, rows = [], [], [], []
     for i in range(n):
         label = bool(i % 2)  # exactly half true; strata are drawn independently of it
-        kinds = (DESCRIPTIONS[rng.integers(3)], DESCRIPTIONS[rng.integers(3)])
+        kinds = tuple(descriptions[rng.integers(len(descriptions))] for _ in range(2))
         relation = relations[rng.integers(len(relations))]
         found = None
         while found is None:
@@ -271,21 +276,27 @@ def default_cache_dir() -> Path:
 
 
 def load_split(
-    split: str, cache_dir: str | Path | None = None, n: int | None = None, seed: int = 0
+    split: str,
+    cache_dir: str | Path | None = None,
+    n: int | None = None,
+    seed: int = 0,
+    descriptions: tuple = DESCRIPTIONS,
 ) -> ShapeWorldSet:
     """
     Return a split, generating it into the cache the first time.
 
-    The file name holds the generator version, the split, its size and the seed, so a change of
-    any of them makes a new file rather than reading a stale one.
+    The file name holds the generator version, the split, its size, the seed and the kinds of
+    naming when not all three, so a change of any of them makes a new file rather than reading
+    a stale one.
     """
     if split not in SPLIT_SIZES:
         raise ValueError(f'ShapeWorld has no split {split!r}; use one of {", ".join(SPLIT_SIZES)}')
     n = SPLIT_SIZES[split] if n is None else n
     if n < 1:
         raise ValueError(f'ShapeWorld split size must be positive, got {n}')
-    name = f'shapeworld-{split}'
-    file_name = f'shapeworld-v{VERSION}-{split}-{n}-seed{seed}.npz'
+    kinds = '' if tuple(descriptions) == DESCRIPTIONS else '-' + '-'.join(descriptions)
+    name = f'shapeworld-{split}{kinds}'
+    file_name = f'shapeworld-v{VERSION}-{split}{kinds}-{n}-seed{seed}.npz'
     path = Path(cache_dir or default_cache_dir()) / file_name
     if path.is_file():
         try:
@@ -297,7 +308,7 @@ def load_split(
             raise ValueError(
                 f'{path}: corrupt ShapeWorld cache ({type(exc).__name__}); delete it to regenerate'
             ) from exc
-    data = generate(n, seed=1000 * seed + SPLIT_SEEDS[split], name=name)
+    data = generate(n, 1000 * seed + SPLIT_SEEDS[split], name, descriptions)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + f'.{os.getpid()}.tmp.npz')
     np.savez_compressed(

@@ -119,7 +119,20 @@ class ShapeWorldTRNet(nn.Module):
         self.text = TextEncoder(cfg)
         sizes = [2 * k + 2, *cfg.mlp, 1]  # input [phi_i; phi_j; d_col; d_row]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
+        # The relation MLP's weights are decoded from words normalised to unit scale, by a
+        # decoder with no bias at start and fan-in-scaled weights, so that the statement, not
+        # the decoder's bias, sets them from the first step: with the default init the LSTM's
+        # outputs (std 0.1) moved the decoded weights by a seventh of their size between
+        # statements, and the logits by 0.04.
+        self.word_norm = nn.LayerNorm(cfg.hidden)
         self.decoder = nn.Linear(cfg.hidden, sum(o * i for o, i in self.layer_shapes))
+        with torch.no_grad():
+            self.decoder.bias.zero_()
+            start = 0
+            for out, inp in self.layer_shapes:
+                rows = self.decoder.weight[start:start + out * inp]
+                rows.normal_(0.0, 1.0 / (inp * cfg.hidden) ** 0.5)
+                start += out * inp
         # zero at start: uniform attention over the words
         self.attn = nn.Linear(cfg.hidden, 2 * k, bias=False)
         nn.init.zeros_(self.attn.weight)
@@ -141,6 +154,7 @@ class ShapeWorldTRNet(nn.Module):
         b, k = len(images), self.cfg.cell_dim
         phi = self.phi(images).flatten(2).transpose(1, 2)  # (B, N, k), N = 64 cells
         words, mask, _ = self.text(tokens)  # (B, L, 30), (B, L)
+        words = self.word_norm(words)
         # attention over words for every pair (i, j); the score splits into an i and a j part
         q = self.attn(words)  # (B, L, 2k)
         score = torch.einsum('bid,bld->bil', phi, q[..., :k])[:, :, None] + torch.einsum(

@@ -136,6 +136,17 @@ def test_labels_are_balanced_overall_and_per_kind_of_statement(data):
     assert kinds == {(False, True), (True, False), (False, False)}, 'shape, colour and both'
 
 
+def test_curriculum_statements_name_both_objects_by_colour_only():
+    data = sw.generate(200, seed=3, descriptions=('colour',))
+    assert data.labels.mean() == 0.5
+    for text in data.statements:
+        subject, _, reference = read(text)
+        assert subject[0] is None and reference[0] is None, text
+        assert subject[1] and reference[1], text
+    with pytest.raises(ValueError, match='descriptions'):
+        sw.generate(2, descriptions=('size',))
+
+
 def test_generation_is_seeded_and_cached(tmp_path):
     a = sw.load_split('test', tmp_path, n=30)
     [path] = tmp_path.glob('*.npz')
@@ -196,11 +207,13 @@ def test_train_and_eval_commands(tmp_path, capsys):
     path, summary = train(
         't-rnet-attn',
         tmp_path,
-        TrainConfig(epochs=1, train_size=40, batch_size=16),
+        TrainConfig(epochs=1, train_size=40, warmup_size=20, warmup_epochs=1, batch_size=16),
         cache_dir=tmp_path,
         progress=False,
     )
     assert path.name == 'shapeworld_t-rnet-attn.pt' and summary['val_examples'] == 4
+    # one warm-up epoch over 20 colour-named statements, one over the 36 training examples
+    assert summary['epochs'] == 2 and summary['train_steps'] == 2 + 3
     argv = ['eval', '--checkpoint', str(path), '--task', 'shapeworld', '--split', 'test',
             '--cache', str(tmp_path), '--json']
     assert cli.main(argv) == 0
