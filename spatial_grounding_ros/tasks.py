@@ -100,6 +100,9 @@ TASKS = {
             pw_modes=('local', 'global'),
             generator_mode='training',
             **_PW,
+            # the default's far relation scores any kind in reach, so it must learn to pass
+            # over objects it does not know (docs/robustness.md)
+            distractors=10,
         ),
         Task(
             'isi',
