@@ -254,6 +254,10 @@ def train_supervised(
     Under `torchrun --nproc_per_node N` each process runs a share of every batch (distributed.py);
     only the first prints progress and writes the checkpoint.
     """
+    if model_name == 't-uvfa':  # its entity table has the kinds alone: no distractor rows
+        if tc.distractors:
+            raise ValueError('t-UVFA has no distractor kinds; train it with --distractors 0')
+        tc = replace(tc, distractors=0)
     tc = tc.for_task(task)
     if tc.synthetic and tasks.task(task).generator_mode is None:
         raise ValueError(

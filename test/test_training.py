@@ -11,6 +11,8 @@ The kept epoch is the second half's best validation PQ (ties: MSE), `--select ms
 validation MSE of all epochs; validation holds out whole PuddleWorld worlds.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from spatial_grounding_ros import datasets
@@ -168,3 +170,19 @@ def test_training_with_distractors_keeps_the_unseen_rows_untouched(tmp_path):
     torch.testing.assert_close(model.phi.embed.weight[unseen], fresh.phi.embed.weight[unseen])
     trained = slice(0, cfg.n_entities + 1)
     assert not torch.equal(model.phi.embed.weight[trained], fresh.phi.embed.weight[trained])
+
+
+def test_t_uvfa_trains_without_distractors_on_a_task_that_has_them(tmp_path):
+    """The pw task's distractors apply to models with distractor rows; t-UVFA has none."""
+    tc = TrainConfig(
+        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
+        goal_weight=0.0, threads=1,
+    )
+    data = generate(40, seed=3, mode='local')
+    path, _ = train_supervised('pw', 't-uvfa', '', tmp_path, tc, train_data=data, progress=False)
+    assert load_checkpoint(path).header['config']['distractor_kinds'] == 0
+    with pytest.raises(ValueError, match='t-UVFA has no distractor kinds'):
+        train_supervised(
+            'pw', 't-uvfa', '', tmp_path, replace(tc, distractors=2), train_data=data,
+            progress=False,
+        )
