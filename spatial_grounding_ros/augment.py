@@ -25,9 +25,8 @@ import torch
 
 from .datasets import GroundingSet
 from .models import distractor_kind_ids
+from .noise import free_cells
 from .text import tokenize
-
-FREE_KIND = 0  # grass (PuddleWorld), the empty board (ISI): where distractors may stand
 
 
 def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:
@@ -240,9 +239,10 @@ def add_distractors(
     A distractor is of one of the model's distractor kinds (ModelConfig.distractor_kinds),
     whose embedding rows are redrawn from N(0, 1) here, at every step, so no draw is ever
     learned: the model learns to pass over objects it does not know. They stand on free cells
-    other than the goal, so the value maps stay true (as the robustness study's unseen objects,
-    which are other rows, held out). `rng` alone draws everything: processes of one data-parallel
-    run, given the same whole batch and generator, agree.
+    other than the goal (noise.free_cells, where the robustness study's unseen objects go too,
+    which are other rows, held out), so the value maps stay true. `rng` alone draws
+    everything: processes of one data-parallel run, given the same whole batch and generator,
+    agree.
     """
     ids = np.array(distractor_kind_ids(model.cfg))
     if most > len(ids):
@@ -254,9 +254,7 @@ def add_distractors(
         weight[ids] = torch.from_numpy(rng.standard_normal((len(ids), weight.shape[1]))).to(weight)
     grids = grids.clone()
     for grid, goal, k in zip(grids.numpy(), goals.numpy(), rng.integers(0, most + 1, len(grids))):
-        free = grid == FREE_KIND
-        free[tuple(goal)] = False
-        cells = np.flatnonzero(free)
+        cells = free_cells(grid, goal)
         k = min(k, len(cells))
         grid.reshape(-1)[rng.permutation(cells)[:k]] = rng.permutation(ids)[:k]
     return grids

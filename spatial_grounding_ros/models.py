@@ -433,6 +433,9 @@ FAR_BEYOND = 1 << 14
 # cells per chunk of kinds in far_map: one large map's planes at a time stay in cache, while the
 # small maps of a training batch take all kinds in one go
 FAR_CHUNK_CELLS = 1 << 18
+# squared_distances takes a pass as one op over all 2R+1 shifts while they hold at most this
+# many entries (per-op costs dominate such small planes), and shifts in place above it
+FAR_UNFOLD_ENTRIES = 1 << 19
 
 
 def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
@@ -442,8 +445,8 @@ def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
     Only marks within `reach` rows and columns count; FAR_BEYOND or more where none does. The
     squared distance splits into rows and columns, so it is two exact passes of 2R+1 shifts,
     O(HWR). It depends on the grid alone (no gradient), so it runs in int16: a 512x512 plane
-    is 512 KB. Small planes take each pass as one op over all shifts (per-op costs dominate
-    there); large ones shift in place, which stays in cache.
+    is 512 KB. Small planes take each pass as one op over all shifts (FAR_UNFOLD_ENTRIES);
+    large ones shift in place, which stays in cache.
     """
     d = torch.full(marks.shape, FAR_BEYOND, dtype=torch.int16, device=marks.device)
     d.masked_fill_(marks, 0)
@@ -451,7 +454,7 @@ def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
         n = d.shape[dim]
         r = min(reach, n - 1)
         padded = F.pad(d, [r, r] if dim == -1 else [0, 0, r, r], value=FAR_BEYOND)
-        if d.numel() * (2 * r + 1) <= FAR_CHUNK_CELLS * 2:
+        if d.numel() * (2 * r + 1) <= FAR_UNFOLD_ENTRIES:
             squares = (torch.arange(-r, r + 1, device=d.device) ** 2).to(d.dtype)
             d = (padded.unfold(dim, 2 * r + 1, 1) + squares).amin(-1)
             continue

@@ -90,6 +90,13 @@ def _map_rng(seed: int, noise: str, index: int) -> np.random.Generator:
     return np.random.default_rng([seed, NOISES.index(noise), index])
 
 
+def free_cells(grid: np.ndarray, goal) -> np.ndarray:
+    """Return the flat indices of a map's free cells other than the goal: where objects may go."""
+    free = grid == FREE_KIND
+    free[tuple(goal)] = False
+    return np.flatnonzero(free)
+
+
 def add_unseen_objects(data: GroundingSet, k: int, seed: int) -> GroundingSet:
     """Put k objects of k different unseen kinds on free cells of each map (not the goal)."""
     _check_k('obs-noise', k)
@@ -98,9 +105,7 @@ def add_unseen_objects(data: GroundingSet, k: int, seed: int) -> GroundingSet:
     unseen = np.array(unseen_kind_ids(len(data.entities), MAX_K))
     grids = data.grids.copy()
     for i, (grid, goal) in enumerate(zip(grids, data.goals)):
-        free = grid == FREE_KIND
-        free[tuple(goal)] = False
-        cells = np.flatnonzero(free)
+        cells = free_cells(grid, goal)
         if len(cells) < k:
             raise ValueError(
                 f'{data.name}: map {i} has {len(cells)} free cells, too few for {k} unseen objects'

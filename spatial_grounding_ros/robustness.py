@@ -126,21 +126,20 @@ def minimum_verdict(rows: list[dict]) -> str | None:
     }
     verdicts = []
     for label, name in (('per-task checkpoints', None), ('pw_* checkpoints', PW_FAMILY)):
+        keys = {task: (task, name or task) for task in MINIMUM_TASKS}
+        if any((*key, m) not in rise for key in keys.values() for m in ('t-rnet-attn', 't-cnn')):
+            continue  # this family lacks a model on a task: it cannot tell
         parts, holds = [], True
-        for task in MINIMUM_TASKS:
-            attn = rise.get((task, name or task, 't-rnet-attn'), 'absent')
-            cnn = rise.get((task, name or task, 't-cnn'), 'absent')
-            if 'absent' in (attn, cnn):
-                break
+        for task, key in keys.items():
+            attn, cnn = rise[(*key, 't-rnet-attn')], rise[(*key, 't-cnn')]
             ok = attn is not None and cnn is not None and attn <= MINIMUM_RISE and attn < cnn
             holds &= ok
             parts.append(
                 f'{task}: t-rnet-attn {_percent(attn)}, t-cnn {_percent(cnn)} '
                 f'({"met" if ok else "not met"})'
             )
-        else:
-            verdict = 'holds' if holds else 'does not hold'
-            verdicts.append(f'{label}: {verdict} ({"; ".join(parts)}).')
+        verdict = 'holds' if holds else 'does not hold'
+        verdicts.append(f'{label}: {verdict} ({"; ".join(parts)}).')
     if not verdicts:
         return None
     return (
