@@ -37,16 +37,13 @@ from .datasets import (
 )
 from .generator import generate, MODES
 from .models import build_model, ModelConfig
+from .noise import MAX_K
 from .options import check, option
 from .text import Vocabulary
 
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
 SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
-
-
-# at most as many distractors a map as the robustness study's unseen objects
-MAX_DISTRACTORS = 10
 
 
 @dataclass
@@ -90,7 +87,7 @@ class TrainConfig:
         'up to this many distractor objects on free cells of each training map, of kinds whose '
         "embeddings are redrawn from N(0, 1) every step (0: none; default: the task's)",
         low=0,
-        high=MAX_DISTRACTORS,
+        high=MAX_K,  # as many as the robustness study's unseen objects
     )
     goal_weight: float | None = option(
         None, "weight of the goal-cell cross-entropy beside the MSE (default: the task's)",
