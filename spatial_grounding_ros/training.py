@@ -103,6 +103,11 @@ class TrainConfig:
         'generated-validation HIT (ties: MSE), or the lowest MSE of all epochs',
         choices=('pq', 'mse'),
     )
+    paper_model: bool = option(
+        False,
+        "the paper's model, without the task's additions (tasks.py: axial views, far relation, "
+        'instruction in the head)',
+    )
     seed: int = option(0, 'seed of the weights, the split and the batches', low=0, high=2**32 - 1)
     threads: int = option(2, 'torch threads', low=1)
 
@@ -260,7 +265,7 @@ def train_supervised(
         raise ValueError(
             f'--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld'
         )
-    model_options = {**tasks.task(task).model, **model_options}
+    model_options = {**({} if tc.paper_model else tasks.task(task).model), **model_options}
     if tc.distractors:
         model_options['distractor_kinds'] = tc.distractors
     if model_name not in ('t-rnet-attn', 't-rnet'):  # the far relation is a relation network's

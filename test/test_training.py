@@ -186,3 +186,18 @@ def test_t_uvfa_trains_without_distractors_on_a_task_that_has_them(tmp_path):
             'pw', 't-uvfa', '', tmp_path, replace(tc, distractors=2), train_data=data,
             progress=False,
         )
+
+
+@pytest.mark.parametrize('paper_model', [False, True])
+def test_paper_model_drops_the_tasks_additions(tmp_path, paper_model):
+    """`--paper-model` trains the paper's t-RNetAttn on a task whose model has additions."""
+    tc = TrainConfig(
+        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
+        goal_weight=0.0, paper_model=paper_model, threads=1,
+    )
+    path, _ = train_supervised(
+        'pw-local', 't-rnet-attn', '', tmp_path, tc,
+        train_data=generate(40, seed=4, mode='local'), progress=False,
+    )
+    cfg = load_checkpoint(path).model.cfg
+    assert (cfg.axial, cfg.far, cfg.head_text) == ((False,) * 3 if paper_model else (True,) * 3)
