@@ -25,8 +25,8 @@ import torch
 
 from .datasets import GroundingSet
 from .models import distractor_kind_ids
-from .noise import free_cells
-from .text import tokenize
+from .noise import free_cells, noise_words
+from .text import PAD, tokenize, UNK, Vocabulary
 
 
 def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:
@@ -258,3 +258,37 @@ def add_distractors(
         k = min(k, len(cells))
         grid.reshape(-1)[rng.permutation(cells)[:k]] = rng.permutation(ids)[:k]
     return grids
+
+
+def noise_word_pools(data: GroundingSet, vocab: Vocabulary) -> list[np.ndarray]:
+    """Return, per example, the ids of the words the robustness study's text noise draws from."""
+    return [
+        np.array([vocab.index[w] for w in noise_words(grid, text, data.entities, vocab)])
+        for grid, text in zip(data.grids, data.instructions)
+    ]
+
+
+def insert_noise_words(
+    tokens: torch.Tensor, pools: list[np.ndarray], most: int, rng: np.random.Generator
+) -> torch.Tensor:
+    """
+    Insert noise words into half the instructions of a batch; return the new (B, L') tokens.
+
+    The textual counterpart of add_distractors: an instruction chosen gets 1..`most` words at
+    one random position, as the robustness study inserts them, each an unknown word (<unk>,
+    what any word outside the vocabulary becomes) or, with equal chance, one of its noise
+    words (`pools`: verbs, articles, names of kinds absent and unreferenced;
+    noise_word_pools). The other half stay clean, so clean instructions keep their weight.
+    `rng` alone draws everything, so data-parallel processes agree.
+    """
+    lengths = (tokens != PAD).sum(1).tolist()
+    out = torch.full((len(tokens), tokens.shape[1] + most), PAD, dtype=tokens.dtype)
+    for i, (row, n, pool) in enumerate(zip(tokens.tolist(), lengths, pools)):
+        k = int(rng.integers(1, most + 1)) if rng.random() < 0.5 else 0
+        at = int(rng.integers(0, n + 1))
+        words = [
+            UNK if unknown or not len(pool) else int(pool[rng.integers(len(pool))])
+            for unknown in rng.random(k) < 0.5
+        ]
+        out[i, :n + k] = torch.tensor(row[:at] + words + row[at:n], dtype=tokens.dtype)
+    return out

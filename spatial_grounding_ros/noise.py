@@ -131,17 +131,28 @@ def _insert_words(
     return replace(data, instructions=instructions, name=f'{data.name}+{noise}{k}')
 
 
+def noise_words(grid: np.ndarray, text: str, entities: EntityTable, vocab: Vocabulary) -> list:
+    """
+    Return the words text-noise draws from for one example, those in `vocab` only.
+
+    Verbs, articles, and the names of kinds that are neither on the map nor referenced.
+    """
+    absent = set(range(len(entities))) - set(np.unique(grid).tolist())
+    absent -= referenced_kinds(text, entities)
+    names = [w for kind in sorted(absent) for w in kind_words(entities, kind)]
+    words = [*VERBS, *ARTICLES, *names]
+    return [w for w in words if w in vocab.index]
+
+
 def add_noise_words(data: GroundingSet, vocab: Vocabulary, k: int, seed: int) -> GroundingSet:
     """Insert k verbs, articles and names of absent, unreferenced kinds into each instruction."""
     _check_k('text-noise', k)
     if k == 0:
         return data
-    names = {kind: kind_words(data.entities, kind) for kind in range(len(data.entities))}
-    pools = []
-    for grid, text in zip(data.grids, data.instructions):
-        absent = set(names) - set(np.unique(grid).tolist()) - referenced_kinds(text, data.entities)
-        words = [*VERBS, *ARTICLES, *(w for kind in sorted(absent) for w in names[kind])]
-        pools.append([w for w in words if w in vocab.index])
+    pools = [
+        noise_words(grid, text, data.entities, vocab)
+        for grid, text in zip(data.grids, data.instructions)
+    ]
     return _insert_words(data, 'text-noise', k, seed, pools)
 
 

@@ -40,6 +40,9 @@ class Task:
     model: dict = field(default_factory=dict)
     # distractor objects per training map, at most (augment.add_distractors; 0: none)
     distractors: int = 0
+    # noise words inserted into half the training instructions, at most (augment.
+    # insert_noise_words; 0: none)
+    text_noise: int = 0
     # RL episodes of `reproduce-rl` (None: not one of the paper's RL rows)
     rl_episodes: int | None = None
     # the paper's Table 1, test split: model -> (MSE, PQ, MD) of supervised training and

@@ -26,7 +26,7 @@ import torch.nn.functional as F
 from tqdm import tqdm
 
 from . import distributed, tasks, world
-from .augment import add_distractors, with_mirrors
+from .augment import add_distractors, insert_noise_words, noise_word_pools, with_mirrors
 from .checkpoints import save_checkpoint
 from .datasets import (
     GroundingSet,
@@ -88,6 +88,13 @@ class TrainConfig:
         "embeddings are redrawn from N(0, 1) every step (0: none; default: the task's)",
         low=0,
         high=MAX_K,  # as many as the robustness study's unseen objects
+    )
+    text_noise: int | None = option(
+        None,
+        'up to this many noise words (unknown words, verbs, articles, absent object names) at '
+        "one position of half the training instructions (0: none; default: the task's)",
+        low=0,
+        high=MAX_K,  # as many as the robustness study inserts
     )
     goal_weight: float | None = option(
         None, "weight of the goal-cell cross-entropy beside the MSE (default: the task's)",
@@ -292,7 +299,7 @@ def train_supervised(
     opt = torch.optim.Adam(
         [*model.parameters()] + ([goal_log_scale] if tc.learn_goal_scale else []), lr=tc.lr
     )
-    encoded = []
+    encoded, word_pools = [], []
     for part in parts:
         grids, tokens = encode(vocab, part)
         encoded.append(
@@ -304,6 +311,7 @@ def train_supervised(
                 (tokens != 0).sum(1).numpy(),
             )
         )
+        word_pools.append(noise_word_pools(part, vocab) if tc.text_noise else None)
     steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
     warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, 'attention', False) else 0
     # the model itself in one process; the warm-up leaves the attention weights unused
@@ -313,6 +321,7 @@ def train_supervised(
     )
     rng = np.random.default_rng(tc.seed)
     distractor_rng = np.random.default_rng([tc.seed, 1])  # the same draws in every process
+    text_noise_rng = np.random.default_rng([tc.seed, 2])
     best = ((float('inf'),), None, -1)
     history = []
     start = time.perf_counter()
@@ -347,11 +356,16 @@ def train_supervised(
                 batch_grids = add_distractors(
                     model, batch_grids, goals[batch], tc.distractors, distractor_rng
                 )
+            batch_tokens = tokens[batch]
+            if tc.text_noise:  # likewise
+                batch_tokens = insert_noise_words(
+                    batch_tokens, [word_pools[part][i] for i in idx], tc.text_noise, text_noise_rng
+                )
             # this process's share (weight 1.0: the whole batch, alone)
             share, weight = distributed.shard(np.arange(len(idx)), processes)
             share = torch.from_numpy(share)
             idx = batch[share]
-            pred = trained(batch_grids[share], _trim(tokens[idx]))
+            pred = trained(batch_grids[share], _trim(batch_tokens[share]))
             loss = torch.mean((pred - values[idx]) ** 2)
             if tc.goal_weight:
                 loss = loss + tc.goal_weight * goal_loss(pred, goals[idx], goal_log_scale.exp())

@@ -201,3 +201,15 @@ def test_paper_model_drops_the_tasks_additions(tmp_path, paper_model):
     )
     cfg = load_checkpoint(path).model.cfg
     assert (cfg.axial, cfg.far, cfg.head_text) == ((False,) * 3 if paper_model else (True,) * 3)
+
+
+def test_text_noise_trains_and_is_recorded(tmp_path):
+    tc = TrainConfig(
+        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
+        goal_weight=0.0, text_noise=3, threads=1,
+    )
+    path, _ = train_supervised(
+        'pw-local', 't-rnet-attn', '', tmp_path, tc,
+        train_data=generate(40, seed=6, mode='local'), progress=False,
+    )
+    assert load_checkpoint(path).header['train_config']['text_noise'] == 3
