@@ -26,6 +26,14 @@ import torch
 EPOCHS = 6
 
 
+def one_epoch(**changes) -> TrainConfig:
+    """One epoch on the training data given, in batches of 16, nothing added to it."""
+    return TrainConfig(
+        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
+        goal_weight=0.0, threads=1, **changes,
+    )
+
+
 def tiny_run(tmp_path, seed: int, select: str) -> dict:
     """
     6 epochs of t-CNN on 160 generated worlds (no data download), at lr 0.05.
@@ -154,10 +162,7 @@ def test_distractors_stand_on_free_cells_and_are_redrawn_every_step():
 
 
 def test_training_with_distractors_keeps_the_unseen_rows_untouched(tmp_path):
-    tc = TrainConfig(
-        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
-        goal_weight=0.0, distractors=3, threads=1,
-    )
+    tc = one_epoch(distractors=3)
     path, _ = train_supervised(
         'pw-local', 't-rnet-attn', '', tmp_path, tc,
         train_data=generate(60, seed=2, mode='local'), progress=False,
@@ -174,10 +179,7 @@ def test_training_with_distractors_keeps_the_unseen_rows_untouched(tmp_path):
 
 def test_t_uvfa_trains_without_distractors_on_a_task_that_has_them(tmp_path):
     """The pw task's distractors apply to models with distractor rows; t-UVFA has none."""
-    tc = TrainConfig(
-        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
-        goal_weight=0.0, threads=1,
-    )
+    tc = one_epoch()
     data = generate(40, seed=3, mode='local')
     path, _ = train_supervised('pw', 't-uvfa', '', tmp_path, tc, train_data=data, progress=False)
     assert load_checkpoint(path).header['config']['distractor_kinds'] == 0
@@ -191,10 +193,7 @@ def test_t_uvfa_trains_without_distractors_on_a_task_that_has_them(tmp_path):
 @pytest.mark.parametrize('paper_model', [False, True])
 def test_paper_model_drops_the_tasks_additions(tmp_path, paper_model):
     """`--paper-model` trains the paper's t-RNetAttn on a task whose model has additions."""
-    tc = TrainConfig(
-        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
-        goal_weight=0.0, paper_model=paper_model, threads=1,
-    )
+    tc = one_epoch(paper_model=paper_model)
     path, _ = train_supervised(
         'pw-local', 't-rnet-attn', '', tmp_path, tc,
         train_data=generate(40, seed=4, mode='local'), progress=False,
@@ -204,10 +203,7 @@ def test_paper_model_drops_the_tasks_additions(tmp_path, paper_model):
 
 
 def test_text_noise_trains_and_is_recorded(tmp_path):
-    tc = TrainConfig(
-        epochs=1, batch_size=16, synthetic=0, mirrors=False, world_instructions=False,
-        goal_weight=0.0, text_noise=3, threads=1,
-    )
+    tc = one_epoch(text_noise=3)
     path, _ = train_supervised(
         'pw-local', 't-rnet-attn', '', tmp_path, tc,
         train_data=generate(40, seed=6, mode='local'), progress=False,
