@@ -31,7 +31,7 @@ from .rl import RLConfig, train_rl
 from .tasks import RL_TASKS, TASKS
 from .training import evaluate, train_supervised, TrainConfig
 
-SHIPPED = ('t-rnet-attn', 't-cnn')
+SHIPPED = ('t-rnet-attn', 't-rnet', 't-cnn')
 # The suite table's columns: the node's default first, then the per-task checkpoints.
 SUITE_CHECKPOINTS = (
     'pw_t-rnet-attn',
