@@ -603,8 +603,9 @@ class TRNet(nn.Module):
 
         The layer is linear, so it splits into an i term, a j term and a position term, each
         computed where it varies: per row, per (row, column) of phi_j and per column. No pair
-        meets the (2k+1)-wide weight, which halves the relation MLP's work on a map and
-        leaves a table's rows (phi_j one column for all P) a sum of three small terms. With
+        meets the (2k+1)-wide weight, which takes about 30% off the relation MLP's work on a
+        map (PuddleWorld: 260 -> 180 multiply-adds a pair) and leaves a table's rows (phi_j
+        one column for all P) a sum of three small terms. With
         attention the words' terms are mixed by it (per pair, or per row when the attention
         has one column).
         """
