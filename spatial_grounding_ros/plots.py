@@ -111,8 +111,9 @@ def plot_robustness(rows: list[dict], path: str | Path) -> Path:
     """
     Plot the paper's robustness curves: MD's relative change against k.
 
-    One panel per task (rows) and noise (columns), one line per model (per checkpoint when a
-    task has two of one model); `rows` as robustness.study returns them.
+    One panel per task (rows) and noise (columns), one line per checkpoint, named by its model
+    (by its checkpoint, when a panel has two of one model: then every line is, so none reads
+    as a family of its own); `rows` as robustness.study returns them.
     """
     tasks = list(dict.fromkeys(r['task'] for r in rows))
     noises = list(dict.fromkeys(r['noise'] for r in rows))
@@ -125,13 +126,14 @@ def plot_robustness(rows: list[dict], path: str | Path) -> Path:
         lines = [r for r in rows if r['task'] == task and r['noise'] == noise]
         checkpoints = list(dict.fromkeys(r['checkpoint'] for r in lines))
         models = [next(r['model'] for r in lines if r['checkpoint'] == c) for c in checkpoints]
+        by_checkpoint = len(set(models)) < len(models)
         for checkpoint, model in zip(checkpoints, models):
             curve = sorted(
                 (r['k'], 100 * r['md_rel'])
                 for r in lines
                 if r['checkpoint'] == checkpoint and r['md_rel'] is not None
             )
-            label = model if models.count(model) == 1 else checkpoint
+            label = Path(checkpoint).stem if by_checkpoint else model
             ax.plot(*zip(*curve), 'o-', label=label)
         ax.axhline(0, color='grey', lw=0.5)
         ax.set_xticks(sorted({r['k'] for r in lines}))
