@@ -108,11 +108,11 @@ def make_probe(context, namespace: str, grounder_name: str):
             self.diagnostics, self.warnings = [], []
             self.stamps = itertools.count(1)
             sub = self.create_subscription
-            sub(PoseStamped, 'goal_pose', self.goals.append, 10)
+            self.goal_sub = sub(PoseStamped, 'goal_pose', self.goals.append, 10)
             sub(OccupancyGrid, 'value_map', self.value_maps.append, LATCHED)
             sub(Float32MultiArray, 'value_map_raw', self.raw_maps.append, LATCHED)
             sub(OccupancyGrid, 'relation_map', self.relation_maps.append, LATCHED)
-            sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 100)
+            self.diagnostics_sub = sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 100)
             sub(Log, '/rosout', self.on_log, 100)
             self.map_pub = self.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
             self.instruction_pub = self.create_publisher(String, 'instruction', 10)
@@ -151,10 +151,17 @@ def make_probe(context, namespace: str, grounder_name: str):
             )
 
         def connected(self) -> bool:
+            # matched, not just seen in the graph: a diagnostic sent before the match is lost
+            diagnostics = self.get_publishers_info_by_topic('/diagnostics')
             return (
                 self.instruction_pub.get_subscription_count() > 0
                 and self.map_pub.get_subscription_count() > 0
-                and self.count_publishers(f'{namespace}/goal_pose') > 0
+                and self.goal_sub.get_publisher_count() > 0
+                and any(
+                    f"{p.node_namespace.rstrip('/')}/{p.node_name}" == grounder_name
+                    for p in diagnostics
+                )
+                and self.diagnostics_sub.get_publisher_count() >= len(diagnostics)
             )
 
         def publish_map(self, grid=None, info=None, frame_id='map', message=None):

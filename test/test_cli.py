@@ -189,6 +189,7 @@ def test_train_options_are_the_config_fields():
         attention_warmup=TASKS['pw'].attention_warmup,
         goal_weight=TASKS['pw'].goal_weight,
         distractors=TASKS['pw'].distractors,
+        text_noise=TASKS['pw'].text_noise,
     )
     args = build_parser().parse_args(
         base + ['--no-mirrors', '--epochs', '7', '--batch-size', '8', '--select', 'mse']
