@@ -46,7 +46,7 @@ reproduce-rl: $(STAMP)
 # one after the other, one thread each, ships their checkpoints, evaluates them clean and under
 # noise: results/shapeworld.json, results/shapeworld.md, results/shapeworld_noise.md
 reproduce-shapeworld: $(STAMP)
-	$(VENV)/bin/spatial-grounding reproduce-shapeworld --threads 2 --out results
+	$(VENV)/bin/spatial-grounding reproduce-shapeworld --out results
 
 # The robustness study on the shipped per-task checkpoints (t-RNetAttn, t-RNet, t-CNN where
 # shipped; about 40 minutes on 2 busy cores): results/robustness.json, .md, .png; and the
