@@ -228,16 +228,37 @@ def truth(
     return bool((diff > 0).any())
 
 
+def absent_description(
+    objects: np.ndarray, kind: str, rng: np.random.Generator
+) -> tuple[int, int]:
+    """Draw a description of `kind` that no object of the scene fits."""
+    while True:
+        description = describe(
+            np.array([rng.integers(len(SHAPES)), rng.integers(len(COLOURS))]), kind
+        )
+        if not matches(objects, description).any():
+            return description
+
+
 def generate(
-    n: int, seed: int = 0, name: str = 'shapeworld', descriptions: tuple = DESCRIPTIONS
+    n: int,
+    seed: int = 0,
+    name: str = 'shapeworld',
+    descriptions: tuple = DESCRIPTIONS,
+    absent: float = 0.0,
 ) -> ShapeWorldSet:
     """
     N examples, half true, half false, in every (description kinds, relation) stratum.
 
     Each example draws its stratum and label first, then scenes and object pairs until a
     statement of that stratum has that label. `descriptions` are the kinds of naming drawn for
-    each side (('colour',): only "a red shape is above a green shape", the curriculum's start).
+    each side (('colour',): only "a red shape is above a green shape"). A fraction `absent` of
+    the false statements name, on one side drawn at random, an object the image does not hold
+    (the curriculum's start: checking which objects exist then predicts labels; the splits
+    keep 0, every false statement plausible).
     """
+    if not 0 <= absent <= 1:
+        raise ValueError(f'absent is a fraction of the false statements, got {absent}')
     if not set(descriptions) <= set(DESCRIPTIONS) or not descriptions:
         raise ValueError(f'descriptions {descriptions} are not some of {DESCRIPTIONS}')
     rng = np.random.default_rng(seed)
@@ -248,6 +269,16 @@ def generate(
         kinds = tuple(descriptions[rng.integers(len(descriptions))] for _ in range(2))
         relation = relations[rng.integers(len(relations))]
         found = None
+        if not label and absent and rng.random() < absent:
+            objects = random_scene(rng)
+            s, r = rng.choice(len(objects), size=2, replace=False)
+            sides = [describe(objects[s], kinds[0]), describe(objects[r], kinds[1])]
+            side = int(rng.integers(2))
+            while True:  # the named side fits no object; the other side fits only its own
+                sides[side] = absent_description(objects, kinds[side], rng)
+                if not (matches(objects, sides[0]) & matches(objects, sides[1])).any():
+                    break
+            found = objects, statement(sides[0], relation, sides[1])
         while found is None:
             objects = random_scene(rng)
             for _ in range(20):
@@ -281,13 +312,14 @@ def load_split(
     n: int | None = None,
     seed: int = 0,
     descriptions: tuple = DESCRIPTIONS,
+    absent: float = 0.0,
 ) -> ShapeWorldSet:
     """
     Return a split, generating it into the cache the first time.
 
-    The file name holds the generator version, the split, its size, the seed and the kinds of
-    naming when not all three, so a change of any of them makes a new file rather than reading
-    a stale one.
+    The file name holds the generator version, the split, its size, the seed, the kinds of
+    naming when not all three and the fraction `absent` when not 0, so a change of any of them
+    makes a new file rather than reading a stale one.
     """
     if split not in SPLIT_SIZES:
         raise ValueError(f'ShapeWorld has no split {split!r}; use one of {", ".join(SPLIT_SIZES)}')
@@ -295,6 +327,7 @@ def load_split(
     if n < 1:
         raise ValueError(f'ShapeWorld split size must be positive, got {n}')
     kinds = '' if tuple(descriptions) == DESCRIPTIONS else '-' + '-'.join(descriptions)
+    kinds += f'-absent{absent:g}' if absent else ''
     name = f'shapeworld-{split}{kinds}'
     file_name = f'shapeworld-v{VERSION}-{split}{kinds}-{n}-seed{seed}.npz'
     path = Path(cache_dir or default_cache_dir()) / file_name
@@ -308,7 +341,7 @@ def load_split(
             raise ValueError(
                 f'{path}: corrupt ShapeWorld cache ({type(exc).__name__}); delete it to regenerate'
             ) from exc
-    data = generate(n, 1000 * seed + SPLIT_SEEDS[split], name, descriptions)
+    data = generate(n, 1000 * seed + SPLIT_SEEDS[split], name, descriptions, absent)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + f'.{os.getpid()}.tmp.npz')
     np.savez_compressed(

@@ -11,21 +11,31 @@ Both map (images (B,3,64,64) float, tokens (B,L) long) to logits (B,2) over (fal
 softmax of the paper is in the cross-entropy loss. The text encoder is models.py's.
 
 t-RNetAttn (paper section 3.2, appendix A "In ShapeWorld we use the same architectures ... except
-for replacing the final convolution layer with a dense layer followed by a softmax"):
-- phi: a small CNN reduces the image to a grid of cells: a stem embeds each 4x4 patch, a 3x3
-  convolution block halves that to 8x8, a 1x1 convolution gives each cell `cell_dim` features
-  (the paper's k), and a 2x2 max-pool keeps 4x4 cells of 16 pixels, about one object each. The
-  receptive field stays local (16 pixels before the pool): with the four-block CNN of t-VGG
-  (46 pixels) a cell sees most of the image, and the model memorised training images instead.
-  The features are continuous, so the relation is computed on every pair's features (no table
-  over entity kinds, as on grids).
-- r_ij = f([phi_i; phi_j; l_ij]) over *every* pair of cells i != j, not the 8 neighbours: the
-  objects a statement relates are anywhere in the image (the paper's footnote extends the
-  neighbourhood this way). l_ij is j's offset from i, (d_col, d_row) / 3: over all pairs, one
-  scalar code cannot tell left from right without a periodic function.
-- f's weights are decoded from the words with attention, as on grids: alpha_ij(k) ~
-  exp(h(k)^T A [phi_i; phi_j]).
-- Z1[i] = max over j of r_ij, flattened, a linear layer to 2 logits.
+for replacing the final convolution layer with a dense layer followed by a softmax"), on pixels:
+- phi: a small CNN reduces the image, with two coordinate channels (CoordConv), to 8x8 cells of
+  8 pixels (a stem over 4x4 patches, a 3x3 block and a 2x2 max-pool, a 3x3 block on the cells,
+  a 1x1 convolution to `cell_dim` features, the paper's k). An object (10-14 pixels) covers a
+  few cells; no two share one.
+- The words h(l) (models.TextEncoder, layer-normalised) are attended once per role: the
+  subject, the reference and the relation ("X is REL Y"). A role's score of word l is
+  q_role^T h(l) plus a learned term in l's position (u in [-1, 1]) and |u|, started so that the
+  subject attends to the first words, the reference to the last and the relation to the
+  middle.
+- r_ij = s(phi_i) + t(phi_j) + f(l_ij) over *every* pair of cells i != j: s and t score how
+  well a cell fits the subject and the reference, with weights decoded from the attended
+  subject and reference words (a k-vector and a bias each); f is the relation MLP (10, 10, 1,
+  tanh, the paper's sizes) on the offset l_ij of j from i, its weights decoded from the
+  relation words, as on grids (TRNet.split_params, TRNet.relation_mlp). The r_ij are
+  log-potentials: their sum is a soft "and" of the three.
+- Z1[i] = log-mean-exp over j of r_ij (a soft max), and the head a log-mean-exp over the cells
+  (a soft "some pair"), a linear layer to 2 logits and softmax.
+
+Departures from the paper, each because the model otherwise stayed at chance (docs/shapeworld.md
+has the runs): roles attended apart and started by position (with one attention for all, the
+statement is symmetric in X and Y, and checking X and Y apart, the first thing to learn, gets no
+gradient); the relation MLP sees the offset only, the cells' fit enters as the decoded s and t;
+soft maxes instead of the paper's max and linear layer over Z1 flattened (a linear layer over
+64 cells spreads the gradient over 60 empty ones).
 
 t-VGG (Andreas et al. 2017, as the paper describes it): VGG-style convolutions, the image
 features concatenated with the text vector (the mean LSTM output), dense 512, 512 with tanh,
@@ -35,6 +45,7 @@ then the 2-way output.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
+import math
 
 import torch
 from torch import nn
@@ -55,8 +66,8 @@ class ShapeWorldConfig:
     stem: int = 4
     channels: tuple = (32, 32)
     cell_dim: int = 16  # k: a cell's feature vector (PuddleWorld's entity embedding is 7)
-    # then a max-pool of this side over the feature grid: 8x8 -> 4x4 cells of 16 pixels
-    cell_pool: int = 2
+    # then a max-pool of this side over the feature grid (1: none, 8x8 cells of 8 pixels)
+    cell_pool: int = 1
     mlp: tuple = (10, 10)  # relation MLP hidden layers (output 1), tanh (the paper's)
     vgg_channels: tuple = (32, 32, 32)  # t-VGG: stem and two blocks, 64 -> 4x4
     dense: tuple = (512, 512)  # t-VGG dense layers, tanh (the paper's)
@@ -74,14 +85,14 @@ class ShapeWorldConfig:
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
 
 
-def conv_blocks(channels: tuple, stem: int) -> nn.Sequential:
+def conv_blocks(channels: tuple, stem: int, inputs: int = 3) -> nn.Sequential:
     """
     Build a stem, then 3x3 convolution, batch norm, ReLU, 2x2 max-pool per further channel count.
 
     The stem embeds each stem x stem patch of pixels (a convolution with that stride, batch norm,
     ReLU): full-resolution 3x3 convolutions cost most of a step and add little on flat shapes.
     """
-    layers = [nn.Conv2d(3, channels[0], stem, stride=stem, bias=False)]
+    layers = [nn.Conv2d(inputs, channels[0], stem, stride=stem, bias=False)]
     layers += [nn.BatchNorm2d(channels[0]), nn.ReLU()]
     previous = channels[0]
     for c in channels[1:]:
@@ -108,79 +119,87 @@ class ShapeWorldTRNet(nn.Module):
     def __init__(self, cfg: ShapeWorldConfig):
         super().__init__()
         self.cfg = cfg
-        k = cfg.cell_dim
-        self.grid = IMAGE // cfg.stem // 2 ** (len(cfg.channels) - 1) // cfg.cell_pool  # 4
-        # a 1x1 convolution last, without ReLU, so cell features can be negative like embeddings
+        k, c = cfg.cell_dim, cfg.channels[-1]
+        self.grid = IMAGE // cfg.stem // 2 ** (len(cfg.channels) - 1) // cfg.cell_pool  # 8
+        # the image with two coordinate channels (CoordConv), so that a cell can tell where in
+        # it its object lies; a 3x3 block on the cells, then a 1x1 convolution without ReLU
         self.phi = nn.Sequential(
-            conv_blocks(cfg.channels, cfg.stem),
-            nn.Conv2d(cfg.channels[-1], k, 1),
+            conv_blocks(cfg.channels, cfg.stem, 3 + 2),
+            nn.Conv2d(c, c, 3, padding=1, bias=False),
+            nn.BatchNorm2d(c),
+            nn.ReLU(),
+            nn.Conv2d(c, k, 1),
             nn.MaxPool2d(cfg.cell_pool),
         )
+        axis = torch.linspace(-1, 1, IMAGE)
+        self.register_buffer(
+            'coords', torch.stack(torch.meshgrid(axis, axis, indexing='xy'))[None],
+            persistent=False,
+        )
         self.text = TextEncoder(cfg)
-        sizes = [2 * k + 2, *cfg.mlp, 1]  # input [phi_i; phi_j; d_col; d_row]
-        self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
-        # The relation MLP's weights are decoded from words normalised to unit scale, by a
-        # decoder with no bias at start and fan-in-scaled weights, so that the statement, not
-        # the decoder's bias, sets them from the first step: with the default init the LSTM's
-        # outputs (std 0.1) moved the decoded weights by a seventh of their size between
-        # statements, and the logits by 0.04.
         self.word_norm = nn.LayerNorm(cfg.hidden)
+        # attention over the words per role: subject, reference, relation; each role's score
+        # of word l also has a term in its position u in [-1, 1] and |u|, started so that the
+        # subject attends to the first words, the reference to the last, the relation to the
+        # middle ("X is REL Y"): with the roles mixed, the statement is symmetric in X and Y,
+        # and checking X and Y apart, the first thing to learn, would get no gradient
+        self.query = nn.Linear(cfg.hidden, 3, bias=False)
+        self.position = nn.Parameter(torch.tensor([[-4.0, 4.0, 0.0], [0.0, 0.0, -4.0]]))
+        # decoded from the attended words: a k-vector per side (which cells match), and the
+        # relation MLP on the pair's offset
+        self.decode_subject = nn.Linear(cfg.hidden, k + 1)
+        self.decode_reference = nn.Linear(cfg.hidden, k + 1)
+        sizes = [2, *cfg.mlp, 1]
+        self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))
         self.decoder = nn.Linear(cfg.hidden, sum(o * i for o, i in self.layer_shapes))
-        with torch.no_grad():
-            self.decoder.bias.zero_()
-            start = 0
-            for out, inp in self.layer_shapes:
-                rows = self.decoder.weight[start:start + out * inp]
-                rows.normal_(0.0, 1.0 / (inp * cfg.hidden) ** 0.5)
-                start += out * inp
-        # zero at start: uniform attention over the words
-        self.attn = nn.Linear(cfg.hidden, 2 * k, bias=False)
-        nn.init.zeros_(self.attn.weight)
-        n = self.grid**2
-        self.register_buffer('offsets', pair_offsets(self.grid), persistent=False)
+        n, g = self.grid**2, self.grid
+        # the (2g-1)^2 distinct offsets between cells, and which one each pair (i, j) has: the
+        # relation MLP scores each offset once
+        d = torch.arange(-(g - 1), g).float() / (g - 1)
+        self.register_buffer(
+            'offset_table', torch.stack(torch.meshgrid(d, d, indexing='xy'), -1).reshape(-1, 2),
+            persistent=False,
+        )
+        rows, cols = torch.meshgrid(torch.arange(g), torch.arange(g), indexing='ij')
+        rows, cols = rows.reshape(-1), cols.reshape(-1)
+        d_row, d_col = rows[None, :] - rows[:, None] + g - 1, cols[None, :] - cols[:, None] + g - 1
+        index = d_row * (2 * g - 1) + d_col
+        self.register_buffer('offset_index', index, persistent=False)
         self.register_buffer('self_pair', torch.eye(n, dtype=torch.bool), persistent=False)
-        self.classify = nn.Linear(n, 2)  # Z1 flattened -> (false, true)
-        # Start as "true by the mean of Z1": every cell's relation score then pushes the same
-        # way, so the max pair of each cell learns what true statements share. From a random
-        # head the cells' gradients cancel out, and every run sat at chance for epochs.
+        self.classify = nn.Linear(1, 2)
         with torch.no_grad():
-            self.classify.weight.copy_(torch.tensor([-1.0, 1.0])[:, None].expand(2, n) / n)
+            self.classify.weight.copy_(torch.tensor([[-1.0], [1.0]]))
             self.classify.bias.zero_()
 
     # decoded parameters (..., P) -> the relation MLP's weights (..., out, in), by layer_shapes
     split_params = TRNet.split_params
 
     def forward(self, images: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
-        b, k = len(images), self.cfg.cell_dim
-        phi = self.phi(images).flatten(2).transpose(1, 2)  # (B, N, k), N = 64 cells
-        words, mask, _ = self.text(tokens)  # (B, L, 30), (B, L)
+        b = len(images)
+        x = torch.cat([images, self.coords.expand(b, -1, -1, -1)], 1)
+        phi = self.phi(x).flatten(2).transpose(1, 2)  # (B, N, k)
+        words, mask, _ = self.text(tokens)
         words = self.word_norm(words)
-        # attention over words for every pair (i, j); the score splits into an i and a j part
-        q = self.attn(words)  # (B, L, 2k)
-        score = torch.einsum('bid,bld->bil', phi, q[..., :k])[:, :, None] + torch.einsum(
-            'bjd,bld->bjl', phi, q[..., k:]
-        )[:, None]  # (B, N, N, L)
-        attention = score.masked_fill(~mask[:, None, None, :], float('-inf')).softmax(-1)
-        w1, *rest = self.split_params(self.decoder(words))  # per word: (B, L, out, in)
-        # First layer, per word then mixed by attention. It is linear in [phi_i; phi_j; l_ij], so
-        # it splits into an i term, a j term and an offset term: N x N pairs never meet a
-        # (2k+2)-wide weight, which makes this layer 3x cheaper than applying it to every pair.
-        w_i, w_j, w_l = w1[..., :k], w1[..., k:2 * k], w1[..., 2 * k:]
-        term_i = torch.einsum('bid,blod->bilo', phi, w_i)  # (B, N, L, out)
-        term_j = torch.einsum('bjd,blod->bjlo', phi, w_j)
-        first = (
-            torch.einsum('bijl,bilo->bijo', attention, term_i)
-            + torch.einsum('bijl,bjlo->bijo', attention, term_j)
-            + torch.einsum('bijl,ijc,bloc->bijo', attention, self.offsets, w_l)
-        )  # (B, N, N, out)
-        # the remaining layers as on grids: tanh, then models.py's attention-mixed MLP
-        r = TRNet.relation_mlp(rest, torch.tanh(first), attention)  # (B, N, N)
-        z1 = r.masked_fill(self.self_pair, float('-inf')).max(-1).values  # (B, N)
-        logits = self.classify(z1)
+        length = mask.sum(1, keepdim=True).clamp(min=2) - 1
+        u = (torch.arange(mask.shape[1])[None] / length * 2 - 1)[..., None]  # (B, L, 1)
+        score = self.query(words) + u * self.position[0] + u.abs() * self.position[1]
+        attention = score.masked_fill(~mask[..., None], float('-inf')).softmax(1)  # (B, L, 3)
+        roles = torch.einsum('blr,blh->brh', attention, words)  # (B, 3, H)
+        ws = self.decode_subject(roles[:, 0])
+        wr = self.decode_reference(roles[:, 1])
+        m_s = torch.einsum('bnd,bd->bn', phi, ws[:, :-1]) + ws[:, -1:]
+        m_r = torch.einsum('bnd,bd->bn', phi, wr[:, :-1]) + wr[:, -1:]
+        w = self.split_params(self.decoder(roles[:, 2]))  # (B, out, in) per layer
+        table = self.offset_table.expand(b, 1, -1, -1)  # (B, 1, (2g-1)^2, 2)
+        rel = TRNet.relation_mlp(w, table, None)[:, 0][:, self.offset_index]  # (B, N, N)
+        r = m_s[:, :, None] + m_r[:, None, :] + rel
+        # a soft max over pairs, as a log-mean-exp: at the scale of r whatever the grid
+        n = r.shape[1]
+        z1 = r.masked_fill(self.self_pair, float('-inf')).logsumexp(-1) - math.log(n - 1)
+        logits = self.classify(z1.logsumexp(-1, keepdim=True) - math.log(n))
         if not return_aux:
             return logits
-        relation_map = z1.view(b, self.grid, self.grid)
-        return logits, {'relation_map': relation_map, 'attention': attention.mean(dim=(1, 2))}
+        return logits, {'relation_map': z1.view(b, self.grid, self.grid), 'attention': attention}
 
 
 class ShapeWorldVGG(nn.Module):

@@ -19,7 +19,7 @@ import pytest
 from spatial_grounding_ros import cli
 from spatial_grounding_ros import shapeworld as sw
 from spatial_grounding_ros.checkpoints import load_checkpoint
-from spatial_grounding_ros.shapeworld_models import build_model, ShapeWorldConfig
+from spatial_grounding_ros.shapeworld_models import build_model, pair_offsets, ShapeWorldConfig
 from spatial_grounding_ros.shapeworld_training import (
     as_input,
     encode,
@@ -147,6 +147,21 @@ def test_curriculum_statements_name_both_objects_by_colour_only():
         sw.generate(2, descriptions=('size',))
 
 
+def test_curriculum_false_statements_name_an_absent_object():
+    data = sw.generate(200, seed=4, absent=1.0)
+    assert data.labels.mean() == 0.5
+    for text, label, objects in zip(data.statements, data.labels, data.objects):
+        subject, _, reference = read(text)
+        objs = boxes(objects)
+        a = [o for o in objs if fits(o, subject)]
+        b = [o for o in objs if fits(o, reference)]
+        assert not [o for o in a if fits(o, reference)], f'{text}: no object is both'
+        # true: both sides exist (and the relation holds, as in the splits); false: one lacks
+        assert bool(a and b) == bool(label), text
+    with pytest.raises(ValueError, match='fraction'):
+        sw.generate(2, absent=1.5)
+
+
 def test_generation_is_seeded_and_cached(tmp_path):
     a = sw.load_split('test', tmp_path, n=30)
     [path] = tmp_path.glob('*.npz')
@@ -181,6 +196,16 @@ def test_noise_leaves_objects_and_statement_words_in_place(data):
         inserted = [w for w in words if w not in text.split() or w in sw.NOISE_WORDS]
         assert len(inserted) >= 3
     assert sw.text_noise(['a b'], 0, rng) == ['a b']
+
+
+def test_relation_scores_each_pair_at_its_offset():
+    model = build_model('t-rnet-attn', ShapeWorldConfig(vocab_size=5))
+    assert model.grid == 8
+    offsets = model.offset_table[model.offset_index]  # (N, N, 2): j from i, (d_col, d_row)
+    torch.testing.assert_close(offsets, pair_offsets(8))
+    # cell 9 is (col 1, row 1), cell 10 one to the right, cell 17 one below
+    assert offsets[9, 10].tolist() == pytest.approx([1 / 7, 0])
+    assert offsets[9, 17].tolist() == pytest.approx([0, 1 / 7])
 
 
 @pytest.mark.parametrize('name', ['t-rnet-attn', 't-vgg'])
