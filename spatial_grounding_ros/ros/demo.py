@@ -100,14 +100,28 @@ class DemoWatcher(Node):
         self.create_subscription(
             OccupancyGrid, 'relation_map', lambda m: setattr(self, 'relation', m), LATCHED
         )
-        self.create_subscription(
-            String, 'instruction', lambda m: setattr(self, 'instruction', m.data), LATCHED
-        )
+        self.following = False  # subscribed to the instruction: see follow_instructions()
         self.create_subscription(
             PoseStamped, 'true_goal', lambda m: setattr(self, 'true_goal', m), LATCHED
         )
         self.next_client = self.create_client(Trigger, 'next_episode')
         self.reset_client = self.create_client(Trigger, 'reset_episode')
+
+    def follow_instructions(self, others: Node) -> bool:
+        """
+        Subscribe to the instruction once every topic followed here and by `others` is matched.
+
+        The gridworld starts the first episode when the instruction has its subscribers, this
+        one last, and a goal or a pose sent before its subscription is matched is lost.
+        """
+        if not self.following and all(
+            s.get_publisher_count() > 0 for s in [*self.subscriptions, *others.subscriptions]
+        ):
+            self.create_subscription(
+                String, 'instruction', lambda m: setattr(self, 'instruction', m.data), LATCHED
+            )
+            self.following = True
+        return self.following
 
     def on_terminated(self, msg: Bool) -> None:
         self.terminated_msgs += 1
@@ -250,7 +264,8 @@ def run_demo(
                 # publishes its first episode once the three subscribers are there
                 spin_until(
                     executor,
-                    lambda: watcher.count_subscribers(f'{namespace}/instruction') >= 3,
+                    lambda: watcher.follow_instructions(recording.recorder)
+                    and watcher.count_subscribers(f'{namespace}/instruction') >= 3,
                     600,
                     'grounder subscription',
                     running,
