@@ -28,7 +28,7 @@ from .datasets import GroundingSet
 from .entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
 GRASS, PUDDLE = 0, 1
-_NUMBER = {1: 'one', 2: 'two'}
+_NUMBER = {1: 'one', 2: 'two', 3: 'three', 4: 'four'}
 _ONE_STEP = {
     (0, -1): 'to left of',
     (0, 1): 'to right of',
@@ -45,6 +45,17 @@ _TWO_STEP = {
     (0, -2): 'two to the left of',
     (0, 2): 'two to the right of',
 }
+# farther along an axis: the human data rarely says "three", but a user will
+_FAR_STEP = {
+    (sign * n * dr, sign * n * dc): f'{_NUMBER[n]} {side}'
+    for n in (3, 4)
+    for sign, (dr, dc), side in (
+        (-1, (1, 0), 'above'),
+        (1, (1, 0), 'below'),
+        (-1, (0, 1), 'to the left of'),
+        (1, (0, 1), 'to the right of'),
+    )
+}
 _COMBINED = [(dr, dc) for dr in (-2, -1, 1, 2) for dc in (-2, -1, 1, 2) if 2 in (abs(dr), abs(dc))]
 # extreme -> (axis, sign): the object with the largest sign * coordinate on that axis
 _EXTREMES = {
@@ -58,14 +69,16 @@ _SIDES = {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'to the left of', (0, 1): 
 
 # Relation families, grouped as the suite reports them. Local: an offset from a unique
 # object. Global: a choice among the non-unique objects. Compositional: two relations in one.
-LOCAL_FAMILIES = ('referent', 'one-step', 'two-step', 'combined')
+LOCAL_FAMILIES = ('referent', 'one-step', 'two-step', 'far-step', 'combined')
 GLOBAL_FAMILIES = ('extreme', 'closest')
 COMPOSITIONAL_FAMILIES = ('extreme-offset', 'row-col', 'between')
 FAMILIES = LOCAL_FAMILIES + GLOBAL_FAMILIES + COMPOSITIONAL_FAMILIES
 # The generator's modes (training mixes): Janner's local worlds hold the offsets, closest,
 # row-col and between; his global worlds the extremes and the cells beside them.
 MODES = {
-    'local': ('referent', 'one-step', 'two-step', 'combined', 'closest', 'row-col', 'between'),
+    'local': (
+        'referent', 'one-step', 'two-step', 'far-step', 'combined', 'closest', 'row-col', 'between'
+    ),
     'global': ('extreme', 'extreme-offset'),
     'mixed': FAMILIES,
     # the default's training mix: closest and row-col twice, the two it learns slowest
@@ -82,6 +95,8 @@ def local_phrase(offset: tuple[int, int], name: str) -> str:
         return f'reach cell {_ONE_STEP[offset]} {name}'
     if offset in _TWO_STEP:
         return f'reach cell {_TWO_STEP[offset]} {name}'
+    if offset in _FAR_STEP:
+        return f'reach cell {_FAR_STEP[offset]} {name}'
     horizontal = f'{_NUMBER[abs(dc)]} to the {"left" if dc < 0 else "right"}'
     vertical = f'{_NUMBER[abs(dr)]} {"above" if dr < 0 else "below"}'
     return f'reach cell {horizontal} and {vertical} {name}'
@@ -91,6 +106,7 @@ FAMILY_OFFSETS = {
     'referent': [(0, 0)],
     'one-step': list(_ONE_STEP),
     'two-step': list(_TWO_STEP),
+    'far-step': list(_FAR_STEP),
     'combined': _COMBINED,
 }
 
@@ -251,7 +267,7 @@ def plant(
 
 
 def local_goals(grid: np.ndarray) -> list[tuple[str, tuple[int, int]]]:
-    """Every offset instruction (referent, one-step, two-step, combined) inside the map."""
+    """Every offset instruction (referent, one-, two- and far-step, combined) inside the map."""
     return [g for f in LOCAL_FAMILIES for g in family_goals(grid, f)]
 
 

@@ -20,7 +20,7 @@ from spatial_grounding_ros import generator, world
 from spatial_grounding_ros.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
 OBJ = '|'.join(PUDDLEWORLD.names[2:])
-NUM = {'one': 1, 'two': 2}
+NUM = {'one': 1, 'two': 2, 'three': 3, 'four': 4}
 EXT = {
     'northernmost': (0, -1),
     'southernmost': (0, 1),
@@ -65,12 +65,12 @@ def answer(grid, text):
         r, c = only(grid, m[2])
         dr, dc = ONE_STEP[m[1]]
         return r + dr, c + dc
-    if m := re.fullmatch(rf'reach cell two (above|below) ({OBJ})', text):
-        r, c = only(grid, m[2])
-        return r + vertical(m[1], 'two'), c
-    if m := re.fullmatch(rf'reach cell two to the (left|right) of ({OBJ})', text):
-        r, c = only(grid, m[2])
-        return r, c + horizontal(m[1], 'two')
+    if m := re.fullmatch(rf'reach cell (two|three|four) (above|below) ({OBJ})', text):
+        r, c = only(grid, m[3])
+        return r + vertical(m[2], m[1]), c
+    if m := re.fullmatch(rf'reach cell (two|three|four) to the (left|right) of ({OBJ})', text):
+        r, c = only(grid, m[3])
+        return r, c + horizontal(m[2], m[1])
     if m := re.fullmatch(
         rf'reach cell (one|two) to the (left|right) and (one|two) (above|below) ({OBJ})', text
     ):
@@ -124,14 +124,15 @@ def answer(grid, text):
 
 @pytest.mark.parametrize('size', [5, 10, 33])
 def test_every_family_names_the_goal_an_independent_reading_gives(size):
-    data = generator.generate(9 * 12, seed=size, mode='mixed', size=size)
+    n = len(generator.FAMILIES) * 12
+    data = generator.generate(n, seed=size, mode='mixed', size=size)
     families = [generator.family_of(w) for w in data.worlds]
     assert {f: families.count(f) for f in set(families)} == {f: 12 for f in generator.FAMILIES}
     for grid, text, goal in zip(data.grids, data.instructions, data.goals):
         assert answer(grid, text) == tuple(goal), text
         assert grid.shape == (size, size) and 0 <= goal[0] < size and 0 <= goal[1] < size
     np.testing.assert_array_equal(world.argmax_cells(data.values), data.goals)
-    again = generator.generate(9 * 12, seed=size, mode='mixed', size=size)
+    again = generator.generate(n, seed=size, mode='mixed', size=size)
     assert again.instructions == data.instructions
 
 
@@ -165,6 +166,8 @@ def test_directions_follow_row0_is_north():
     assert goals['reach cell on top of star'] == (4, 5)
     assert goals['reach cell two below star'] == (7, 5)
     assert goals['reach cell two to the right of star'] == (5, 7)
+    assert goals['reach cell three above star'] == (2, 5)
+    assert goals['reach cell four to the right of star'] == (5, 9)
     assert goals['reach cell one to the left and two below star'] == (7, 4)
     grid[2, 1] = grid[8, 3] = PUDDLEWORLD.index('rock')
     goals = dict(generator.global_goals(grid))
@@ -197,7 +200,7 @@ def test_phrasing_is_janners_word_for_word(data_dir):
         text = re.sub(rf'\b({"|".join(PUDDLEWORLD_UNIQUE)})\b', 'U', text)
         text = re.sub(rf'\b({"|".join(PUDDLEWORLD_NONUNIQUE)})\b', 'N', text)
         text = re.sub(r'\b(northernmost|southernmost|westernmost|easternmost)\b', 'EXT', text)
-        text = re.sub(r'\b(one|two)\b', 'K', text)
+        text = re.sub(r'\b(one|two|three|four)\b', 'K', text)  # far-step: Janner's, farther
         text = re.sub(r'\b(left|right)\b', 'LR', text)
         text = re.sub(r'\b(above|below)\b', 'AB', text)
         return re.sub(r'\b(top|bottom)\b', 'TB', text)
@@ -207,6 +210,6 @@ def test_phrasing_is_janners_word_for_word(data_dir):
         for path in sorted((data_dir / 'puddleworld' / mode).glob('*.p')):
             with open(path, 'rb') as f:
                 janner |= {template(t) for t in pickle.load(f, encoding='latin1')['instructions']}
-    data = generator.generate(9 * 30, seed=1, mode='mixed', size=12)
+    data = generator.generate(len(generator.FAMILIES) * 30, seed=1, mode='mixed', size=12)
     ours = {template(t) for t in data.instructions}
     assert ours <= janner, sorted(ours - janner)
