@@ -39,16 +39,11 @@ _ONE_STEP = {
     (1, -1): 'to bottom left of',
     (1, 1): 'to bottom right of',
 }
-_TWO_STEP = {
-    (-2, 0): 'two above',
-    (2, 0): 'two below',
-    (0, -2): 'two to the left of',
-    (0, 2): 'two to the right of',
-}
-# farther along an axis: the human data rarely says "three", but a user will
-_FAR_STEP = {
+# n cells along an axis ("two below", "three to the left of"): two-step is Janner's, far-step
+# (three and four) ours, since the human data rarely says "three" but a user will
+_STRAIGHT = {
     (sign * n * dr, sign * n * dc): f'{_NUMBER[n]} {side}'
-    for n in (3, 4)
+    for n in (2, 3, 4)
     for sign, (dr, dc), side in (
         (-1, (1, 0), 'above'),
         (1, (1, 0), 'below'),
@@ -93,10 +88,8 @@ def local_phrase(offset: tuple[int, int], name: str) -> str:
         return f'reach cell with {name}'
     if offset in _ONE_STEP:
         return f'reach cell {_ONE_STEP[offset]} {name}'
-    if offset in _TWO_STEP:
-        return f'reach cell {_TWO_STEP[offset]} {name}'
-    if offset in _FAR_STEP:
-        return f'reach cell {_FAR_STEP[offset]} {name}'
+    if offset in _STRAIGHT:
+        return f'reach cell {_STRAIGHT[offset]} {name}'
     horizontal = f'{_NUMBER[abs(dc)]} to the {"left" if dc < 0 else "right"}'
     vertical = f'{_NUMBER[abs(dr)]} {"above" if dr < 0 else "below"}'
     return f'reach cell {horizontal} and {vertical} {name}'
@@ -105,8 +98,8 @@ def local_phrase(offset: tuple[int, int], name: str) -> str:
 FAMILY_OFFSETS = {
     'referent': [(0, 0)],
     'one-step': list(_ONE_STEP),
-    'two-step': list(_TWO_STEP),
-    'far-step': list(_FAR_STEP),
+    'two-step': [o for o in _STRAIGHT if max(map(abs, o)) == 2],
+    'far-step': [o for o in _STRAIGHT if max(map(abs, o)) > 2],
     'combined': _COMBINED,
 }
 
