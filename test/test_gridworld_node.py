@@ -188,8 +188,8 @@ def test_closed_loop_demo(tmp_path, capsys):
     out = capsys.readouterr().out
     assert summary['episodes'] == 3
     # the shipped default sends goal_pose to the named cell (about 95% of generated 10x10
-    # instructions, README suite table): all three seeded episodes ("reach cell with spade",
-    # "... on bottom of triangle", "... two to the right of heart"), as the bag records them.
+    # instructions, README suite table): all three seeded episodes ("reach cell with circle",
+    # "... to top right of triangle", "... two below diamond"), as the bag records them.
     # (Reaching the goal is weaker: a walk to the triangle crosses the cell below it.)
     assert summary['from_bag']['hit'] == 1.0, summary['per_episode']
     # each episode's outcome is its own: terminated exactly when it ended on the true goal
