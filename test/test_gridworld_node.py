@@ -187,7 +187,7 @@ def test_closed_loop_demo(tmp_path, capsys):
     )
     out = capsys.readouterr().out
     assert summary['episodes'] == 3
-    # the shipped default sends goal_pose to the named cell (about 95% of generated 10x10
+    # the shipped default sends goal_pose to the named cell (98.5% of generated 10x10
     # instructions, README suite table): all three seeded episodes ("reach cell with circle",
     # "... to top right of triangle", "... two below diamond"), as the bag records them.
     # (Reaching the goal is weaker: a walk to the triangle crosses the cell below it.)
