@@ -18,6 +18,7 @@ Sizes are the paper's (section 3.2, appendix A); PuddleWorld numbers in comments
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
+import functools
 
 import torch
 from torch import nn
@@ -227,9 +228,10 @@ def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool)
     return (values, {'relation_map': z1, 'attention': attention}) if return_aux else values
 
 
+@functools.lru_cache(maxsize=16)
 def gradient_maps(height: int, width: int, device=None, cells: float = 0.0) -> torch.Tensor:
     """
-    (3, H, W): G1 horizontal (west to east), G2 vertical (north to south), J ones.
+    (3, H, W): G1 horizontal (west to east), G2 vertical (north to south), J ones (read only).
 
     cells = 0: G1 and G2 span -1..1 whatever the map size (the paper's). cells > 0: they are
     0 at the centre and rise by 1 every `cells` cells, so one row further south is worth the
@@ -304,7 +306,8 @@ class OutputHead(nn.Module):
         """
         h, w = z1.shape[1:]
         beta, film = code[:, :3], code[:, 3:] if self.film else None
-        z2 = torch.einsum('bc,chw->bhw', beta, gradient_maps(h, w, z1.device, self.gradient_cells))
+        gradients = gradient_maps(h, w, z1.device, self.gradient_cells).view(3, h * w)
+        z2 = (beta @ gradients).view(-1, h, w)
         x = torch.stack([z1, z2] if far is None else [z1, z2, far], dim=1)
         if not (self.axial or self.film):
             return self.tiled(x, first=0, layout=layout)
@@ -379,8 +382,8 @@ class OutputHead(nn.Module):
                 x = torch.cat([x, *(v.window(*window) for v in views[n])], 1)
             x = self.convs[n](x)
             if n == 0 and film is not None:
-                scale, shift = film.chunk(2, dim=1)
-                x = x * (1 + scale[..., None, None]) + shift[..., None, None]
+                scale, shift = film[..., None, None].chunk(2, dim=1)
+                x = x * (1 + scale) + shift
             if n < len(self.convs) - 1:
                 x = F.leaky_relu(x, self.slope, inplace=True)  # the conv's own output
         return x[:, 0] if last == len(self.convs) else x
@@ -433,6 +436,9 @@ FAR_BEYOND = 1 << 14
 # cells per chunk of kinds in far_map: one large map's planes at a time stay in cache, while the
 # small maps of a training batch take all kinds in one go
 FAR_CHUNK_CELLS = 1 << 18
+# far_map scores every cell pair of maps within reach while they have at most this many pairs
+# (one 10x10 map: 10^4); a training batch takes the distance transforms, which are cheaper there
+FAR_PAIRS = 1 << 16
 # squared_distances takes a pass as one op over all 2R+1 shifts while they hold at most this
 # many entries (per-op costs dominate such small planes), and shifts in place above it
 FAR_UNFOLD_ENTRIES = 1 << 19
@@ -464,6 +470,42 @@ def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
                 torch.add(padded.narrow(dim, start, n), s * s, out=step)
                 torch.minimum(d, step, out=d)
     return d
+
+
+@functools.lru_cache(maxsize=16)
+def pair_distances(height: int, width: int, device=None) -> torch.Tensor:
+    """(H*W, H*W): the squared distance between every two cells of a map (read only)."""
+    rows, cols = torch.meshgrid(
+        torch.arange(height, device=device), torch.arange(width, device=device), indexing='ij'
+    )
+    cells = torch.stack([rows.flatten(), cols.flatten()], 1).float()
+    return ((cells[:, None] - cells[None]) ** 2).sum(-1)
+
+
+class Tanh(torch.autograd.Function):
+    """
+    tanh for training, computed as 2 sigmoid(2x) - 1 (the same function).
+
+    This torch's CPU tanh is 3x slower than its sigmoid (1.28 against 0.38 ms on 512k floats,
+    one thread, AVX-512), and the relation MLP's tanh was a tenth of a training step. The
+    backward is tanh's own, from the output: grad * (1 - y^2).
+    """
+
+    @staticmethod
+    def forward(ctx, x: torch.Tensor) -> torch.Tensor:
+        y = torch.sigmoid(x * 2).mul_(2).sub_(1)
+        ctx.save_for_backward(y)
+        return y
+
+    @staticmethod
+    def backward(ctx, grad: torch.Tensor) -> torch.Tensor:
+        (y,) = ctx.saved_tensors
+        return torch.ops.aten.tanh_backward(grad, y)
+
+
+def tanh(x: torch.Tensor) -> torch.Tensor:
+    """Return the tanh of x: Tanh when training (large tensors), torch's own otherwise (small)."""
+    return Tanh.apply(x) if x.requires_grad and torch.is_grad_enabled() else torch.tanh(x)
 
 
 def build_head(cfg: ModelConfig) -> OutputHead:
@@ -508,13 +550,18 @@ class TRNet(nn.Module):
         self.head = build_head(cfg)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
+        self.relation_size = sum(out * inp for out, inp in self.layer_shapes)  # 260 of the 263
         if cfg.far:
             self.far_log_cost = nn.Parameter(torch.tensor(FAR_LOG_COST))
 
-    def split_params(self, params: torch.Tensor) -> list[torch.Tensor]:
-        """Cut a parameter vector (..., 263) into the relation MLP's weights (..., out, in)."""
+    def split_params(self, params: torch.Tensor, first: int = 0) -> list[torch.Tensor]:
+        """
+        Cut a parameter vector (..., 263) into the relation MLP's weights (..., out, in).
+
+        `first` > 0: the vector holds the weights of layers first, first + 1, ... only.
+        """
         weights, start = [], 0
-        for out, inp in self.layer_shapes:
+        for out, inp in self.layer_shapes[first:]:
             weights.append(params[..., start:start + out * inp].unflatten(-1, (out, inp)))
             start += out * inp
         return weights
@@ -528,10 +575,8 @@ class TRNet(nn.Module):
 
         Without attention the weights are one set per map, (B, out, in). With attention the
         pair (i, j) uses W_ij = sum_k alpha_ij(k) W(k), the weights decoded from each word k
-        (B, L, out, in). When each row's P columns differ in attention (a map's 8 neighbours),
-        W_ij x = sum_k alpha_ij(k) (W(k) x): one matmul per word and a weighted sum, never a
-        weight matrix per pair (3x faster, same result). When they share it (a table row's
-        offsets: attention (B, N, 1, L)), each row's weights are mixed once instead.
+        (B, L, out, in), attention (B, N, P, L): W_ij x = sum_k alpha_ij(k) (W(k) x), one
+        matmul per word and a weighted sum, never a weight matrix per pair.
         """
         if not weights:
             return x.squeeze(-1)
@@ -541,54 +586,40 @@ class TRNet(nn.Module):
             b, n, p, _ = x.shape
             x = x.reshape(b, n * p, -1).transpose(1, 2)
             for w in weights[:-1]:
-                x = torch.tanh(torch.bmm(w, x))
+                x = tanh(torch.bmm(w, x))
             return torch.bmm(weights[-1], x).view(b, n, p)
         for n, w in enumerate(weights):
-            if attention.shape[2] == 1:
-                mixed = torch.einsum('bnl,bloi->bnoi', attention[:, :, 0], w)
-                x = torch.einsum('bnpi,bnoi->bnpo', x, mixed)
-            else:
-                x = (attention.unsqueeze(-1) * torch.einsum('bnpi,bloi->bnplo', x, w)).sum(-2)
+            x = (attention.unsqueeze(-1) * torch.einsum('bnpi,bloi->bnplo', x, w)).sum(-2)
             if n < len(weights) - 1:
-                x = torch.tanh(x)
+                x = tanh(x)
         return x.squeeze(-1)
 
-    def relations(
-        self,
-        phi_i: torch.Tensor,
-        phi_j: torch.Tensor,
-        text: tuple,
-        rel: torch.Tensor | None = None,
-    ):
+    def relations(self, phi_i: torch.Tensor, phi_j: torch.Tensor, text: tuple):
         """
-        Score pairs: centres phi_i (B, M, k) against phi_j (B, M, 8, k) at the 8 offsets.
+        Score every pair of a map: centres phi_i (B, N, k) against phi_j (B, N, P, k).
 
-        Returns r (B, M, 8) and the attention over words (B, M, 8, L) (None without it). The
-        M rows are a map's cells (reference) or a table's kind pairs (fast): the same code.
-        `rel`: position codes (P,) for P columns of phi_j (default: the 8 offsets'); phi_j
-        may have one column for all P (a table's), and the attention then has one too.
+        Returns r (B, N, P) and the attention over words (B, N, P, L) (None without it).
         """
         words, mask, mean = text  # (B, L, 30), (B, L), (B, 30)
-        if rel is None:
-            rel = relative_positions(self.cfg.radius)
+        rel = relative_positions(self.cfg.radius).to(phi_j.device)
         k = phi_j.shape[-1]
         attention = None
         if self.attention_on:
             # alpha_ij(k) ~ exp(h(k)^T A [phi_i; phi_j]); the score splits into an i part and
-            # a j part, so it costs (B, M, L) + (B, M, 8, L), not a product over all three.
+            # a j part, so it costs (B, N, L) + (B, N, P, L), not a product over all three.
             q = self.attn(words)  # (B, L, 2k)
             score = torch.einsum('bnd,bld->bnl', phi_i, q[..., :k]).unsqueeze(2) + torch.einsum(
                 'bnpd,bld->bnpl', phi_j, q[..., k:]
             )
             score = score.masked_fill(~mask[:, None, None, :], float('-inf'))
-            attention = score.softmax(-1)  # (B, M, 8, L)
+            attention = score.softmax(-1)  # (B, N, P, L)
             # the decoder is linear and sum_k alpha = 1, so decoding h_ij equals the
             # alpha-weighted sum of the words' decoded parameters
             weights = self.split_params(self.decoder(words))  # (B, L, out, in) per layer
         else:
             weights = self.split_params(self.decoder(mean))  # (B, out, in) per layer
-        first = self.first_layer(weights[0], phi_i, phi_j, rel.to(phi_j.device), attention)
-        return self.relation_mlp(weights[1:], torch.tanh(first), attention), attention
+        first = self.first_layer(weights[0], phi_i, phi_j, rel, attention)
+        return self.relation_mlp(weights[1:], tanh(first), attention), attention
 
     @staticmethod
     def first_layer(
@@ -599,40 +630,82 @@ class TRNet(nn.Module):
         attention: torch.Tensor | None,
     ) -> torch.Tensor:
         """
-        Compute W1 [phi_i; phi_j; l] for every row and column: (B, M, P, out).
+        Compute W1 [phi_i; phi_j; l] for every pair: (B, N, P, out).
 
         The layer is linear, so it splits into an i term, a j term and a position term, each
-        computed where it varies: per row, per (row, column) of phi_j and per column. No pair
-        meets the (2k+1)-wide weight, which takes about 30% off the relation MLP's work on a
-        map (PuddleWorld: 260 -> 180 multiply-adds a pair) and leaves a table's rows (phi_j
-        one column for all P) a sum of three small terms. With
-        attention the words' terms are mixed by it (per pair, or per row when the attention
-        has one column).
+        computed where it varies: per cell, per pair and per offset. No pair meets the
+        (2k+1)-wide weight, which takes about 30% off the relation MLP's work on a map
+        (PuddleWorld: 260 -> 180 multiply-adds a pair). With attention the words' terms are
+        mixed by it, per pair.
         """
         b, m, p, k = phi_j.shape
         w_i, w_j, w_rel = w1[..., :k], w1[..., k:2 * k], w1[..., 2 * k]
         if attention is None:
             # one set of weights per map, (B, out, in): computed with the pairs as columns,
-            # (B, out, M, P), the layout relation_mlp's bmm reads without a copy
+            # (B, out, N, P), the layout relation_mlp's bmm reads without a copy
             term_i = torch.bmm(w_i, phi_i.transpose(1, 2))[..., None]
             term_j = torch.bmm(w_j, phi_j.reshape(b, m * p, k).transpose(1, 2))
             first = term_i + term_j.view(b, -1, m, p) + w_rel[:, :, None, None] * rel
             return first.permute(0, 2, 3, 1)
         # per word (B, L, out, in): each term for every word, then the attention-weighted sum
         term_i = torch.einsum('bnd,blod->bnlo', phi_i, w_i)
-        if attention.shape[2] == 1:  # one mix per row, shared by its columns
-            alpha = attention[:, :, 0]  # (B, M, L)
-            term_j = torch.einsum('bnd,blod->bnlo', phi_j[:, :, 0], w_j)
-            fixed = torch.einsum('bnl,bnlo->bno', alpha, term_i + term_j)
-            return fixed[:, :, None] + rel[:, None] * torch.einsum('bnl,blo->bno', alpha, w_rel)[
-                :, :, None
-            ]
         term_j = torch.einsum('bnpd,blod->bnplo', phi_j, w_j)
         return (
             torch.einsum('bnpl,bnlo->bnpo', attention, term_i)
             + torch.einsum('bnpl,bnplo->bnpo', attention, term_j)
             + rel[:, None] * torch.einsum('bnpl,blo->bnpo', attention, w_rel)
         )
+
+    def table(self, kinds: torch.Tensor, kinds_j: torch.Tensor, text: tuple, rel: torch.Tensor):
+        """
+        Score every (kind_i, kind_j) of `kinds` x `kinds_j` at each position code of `rel` (P,).
+
+        Returns r (B, Ki * Kj, P), row i * Kj + j, and the attention over words of each row
+        (B, Ki * Kj, L), or None without attention. A pair's attention has no position term,
+        so a row mixes the words' weights once for all its positions, where a map's pairs
+        would each mix their own. The first layer splits into an i, a j and a position term
+        (first_layer), here computed per kind and per word before the mix. t-RNet is the
+        same computation with one 'word', the LSTM outputs' mean, at weight 1.
+        """
+        words, mask, mean = text  # (B, L, 30), (B, L), (B, 30)
+        embed = self.phi.embed.weight
+        phi_i, phi_j = embed[kinds], embed[kinds_j]  # (Ki, k), (Kj, k)
+        k = embed.shape[1]
+        if not self.attention_on:
+            words = mean[:, None]  # one 'word': t-RNet's weights, shared by every pair
+        decoded = self.decoder(words)  # (B, L, 263): the words' relation MLPs and the head code
+        first = self.layer_shapes[0][0] * self.layer_shapes[0][1]
+        w1 = decoded[..., :first].unflatten(-1, self.layer_shapes[0])  # (B, L, out, 2k + 1)
+        term_i = torch.einsum('id,blod->bilo', phi_i, w1[..., :k])  # (B, Ki, L, out)
+        term_j = torch.einsum('jd,blod->bjlo', phi_j, w1[..., k:2 * k])  # (B, Kj, L, out)
+        if self.attention_on:
+            # alpha ~ exp(h^T A [phi_i; phi_j]): an i part and a j part, (B, Ki, Kj, L)
+            q = self.attn(words)  # (B, L, 2k)
+            score = (q[..., :k] @ phi_i.T).transpose(1, 2)[:, :, None] + (
+                q[..., k:] @ phi_j.T
+            ).transpose(1, 2)[:, None]
+            alpha = score.masked_fill(~mask[:, None, None], float('-inf')).softmax(-1)
+            fixed = torch.einsum('bijl,bilo->bijo', alpha, term_i) + torch.einsum(
+                'bijl,bjlo->bijo', alpha, term_j
+            )
+            rows = alpha.flatten(1, 2)  # (B, R, L)
+            slope = rows @ w1[..., 2 * k]  # (B, R, out): the position term's weights, mixed
+        else:
+            fixed = term_i[:, :, None, 0] + term_j[:, None, :, 0]
+            slope = w1[..., 2 * k]  # (B, 1, out)
+        x = tanh(fixed.flatten(1, 2)[:, :, None] + rel[:, None] * slope[:, :, None])
+        later = decoded[..., first:self.relation_size]  # the later layers' weights per word
+        b, r, p, _ = x.shape
+        if self.attention_on:  # each row's own weights, mixed once: (B, R, out, in) per layer
+            weights = self.split_params(rows @ later, first=1)
+        else:  # one set per instruction (B, 1, out, in): the rows' positions are one bmm's rows
+            weights = self.split_params(later, first=1)
+            x = x.reshape(b, 1, r * p, -1)
+        for n, w in enumerate(weights):
+            x = x @ w.mT
+            if n < len(weights) - 1:
+                x = tanh(x)
+        return x.view(b, r, p), rows if self.attention_on else None
 
     def forward(
         self,
@@ -646,11 +719,11 @@ class TRNet(nn.Module):
 
         reference=True scores every cell pair of the maps (the definition); otherwise the
         relation table over the kinds present is used when it is the cheaper (a table row is a
-        (kind_i, kind_j) pair, a map row a cell; both have 8 offsets). Without attention that
-        is when it has fewer rows than the maps have cells: a 10x10 batch with all 12 kinds
-        has 12 x 13 = 156 rows against 100 cells. With attention each of a map's pairs mixes
-        the L words' weights, a table row mixes them once for all its offsets, so the table
-        wins on any map but the smallest (a 10x10 training step: 2.6x).
+        (kind_i, kind_j) pair with a column per offset, a map row a cell with its 8
+        neighbours). Without attention that is when it has fewer rows than the maps have
+        cells: a 10x10 batch with all 12 kinds has 12 x 13 = 156 rows against 100 cells. With
+        attention each of a map's pairs mixes the L words' weights, a table row mixes them
+        once for all its offsets, so the table wins on any map but the smallest.
         """
         kinds = present_kinds(grids, self.cfg.n_entities)
         rows, cells = len(kinds) * (len(kinds) + 1), grids.shape[1] * grids.shape[2]
@@ -693,75 +766,71 @@ class TRNet(nn.Module):
         if kinds is None:
             kinds = torch.arange(self.cfg.n_entities, device=tokens.device)
         kinds_j = torch.cat([kinds, kinds.new_tensor([self.phi.off_map])])
-        b, n_nbrs = tokens.shape[0], len(neighbour_offsets(self.cfg.radius))
-        embed = self.phi.embed.weight
-        phi_i = embed[kinds].repeat_interleave(len(kinds_j), dim=0)  # (Ki * Kj, k)
-        phi_j = embed[kinds_j].repeat(len(kinds), 1)
+        n_nbrs = len(neighbour_offsets(self.cfg.radius))
         text = self.text(tokens)
         # the far relation's position is a ninth column of the same rows: one pass scores both
         # (far_table's (kind_i, kind_j) are the rows whose j is not off the map)
-        rel = relative_positions(self.cfg.radius)
+        rel = relative_positions(self.cfg.radius).to(tokens.device)
         if self.cfg.far:
-            rel = torch.cat([rel, torch.tensor([FAR_POSITION])])
-        r, attention = self.relations(
-            phi_i.expand(b, -1, -1), phi_j[None, :, None].expand(b, -1, -1, -1), text, rel
-        )
+            rel = torch.cat([rel, rel.new_tensor([FAR_POSITION])])
+        r, attention = self.table(kinds, kinds_j, text, rel)
         far = None
         if self.cfg.far:
             far = r[..., n_nbrs].unflatten(1, (len(kinds), len(kinds_j)))[..., :-1]
         return {
             'kinds': kinds,
             'relations': r[..., :n_nbrs],
-            'attention': None if attention is None else attention[:, :, 0],
+            'attention': attention,
             'head': self.decoder(text[2])[:, -self.head.code_size:],
             'far': far,
         }
 
-    def kind_rows(self, grids: torch.Tensor, kinds: torch.Tensor):
-        """
-        Return each entity kind's row in a table over `kinds` (-1: absent), and each cell's.
-
-        The cells' rows are (B, H*W); a grid kind the table lacks is an error.
-        """
+    def kind_rows(self, grids: torch.Tensor, kinds: torch.Tensor) -> torch.Tensor:
+        """Return each cell's row in a table over `kinds`, (B, H*W); a kind it lacks: an error."""
         row = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
         row[kinds] = torch.arange(len(kinds), device=grids.device)
         cells = row[grids].flatten(1)
         if cells.min() < 0:
             missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
             raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
-        return row, cells
+        return cells
 
     def far_table(self, text: tuple, kinds: torch.Tensor) -> torch.Tensor:
         """Score each (kind_i, kind_j) of `kinds` with the far relation: (B, K, K)."""
-        embed = self.phi.embed.weight
-        b, n = text[0].shape[0], len(kinds)
-        phi_i = embed[kinds].repeat_interleave(n, dim=0)  # (K * K, k)
-        phi_j = embed[kinds].repeat(n, 1)
-        r, _ = self.relations(
-            phi_i.expand(b, -1, -1),
-            phi_j[None, :, None].expand(b, -1, 1, -1),
-            text,
-            rel=torch.tensor([FAR_POSITION]),
-        )
-        return r.view(b, n, n)
+        r, _ = self.table(kinds, kinds, text, torch.tensor([FAR_POSITION], device=kinds.device))
+        return r.view(-1, len(kinds), len(kinds))
 
-    def far_map(self, grids: torch.Tensor, kinds: torch.Tensor, table: torch.Tensor):
+    def far_map(
+        self,
+        grids: torch.Tensor,
+        kinds: torch.Tensor,
+        table: torch.Tensor,
+        rows: torch.Tensor | None = None,
+    ):
         """
         Return the far relation map (B, H, W): per cell i, max over j of far - cost d^2.
 
         j runs over the cells within FAR_REACH rows and columns of i, d = |i - j|, and far is
-        the far relation's score of (kind_i, kind_j), from `table`. A cell's own kind a is at
-        distance 0, so far(a, a) is its floor, and a kind k can raise it only where
-        far(a, k) - cost * d^2 > far(a, a): only such kinds are measured, and only as far as
-        that gain reaches (exact, and a fraction of the work on a large map). Per kind k, each
-        cell adds its row's far(a, k) to -cost times its squared distance to the nearest k.
+        the far relation's score of (kind_i, kind_j), from `table`. A few maps no larger than
+        the reach take that definition as it stands: every cell pair, one gather (FAR_PAIRS).
+        Otherwise a cell's own kind a is at distance 0, so far(a, a) is its floor, and a kind k can
+        raise it only where far(a, k) - cost * d^2 > far(a, a): only such kinds are measured,
+        and only as far as that gain reaches (exact, and a fraction of the work on a large
+        map). Per kind k, each cell adds its row's far(a, k) to -cost times its squared
+        distance to the nearest k. `rows`: the cells' kind_rows, when the caller has them.
         """
         b, h, w = grids.shape
-        _, rows = self.kind_rows(grids, kinds)  # (B, H*W): each cell's row of the table
+        if rows is None:
+            rows = self.kind_rows(grids, kinds)  # (B, H*W): each cell's row of the table
         table = table.expand(b, -1, -1)
-        out = table.diagonal(dim1=1, dim2=2).gather(1, rows).view(b, h, w)  # far(a, a)
         cost = self.far_log_cost.exp()
-        present = torch.bincount(rows.flatten(), minlength=len(kinds)) > 0
+        n = len(kinds)
+        if h <= FAR_REACH + 1 and w <= FAR_REACH + 1 and b * (h * w) ** 2 <= FAR_PAIRS:
+            pairs = (rows[:, :, None] * n + rows[:, None, :]).flatten(1)  # (B, N * N)
+            scores = table.flatten(1).gather(1, pairs).view(b, h * w, h * w)
+            return (scores - cost * pair_distances(h, w, grids.device)).amax(-1).view(b, h, w)
+        out = table.diagonal(dim1=1, dim2=2).gather(1, rows).view(b, h, w)  # far(a, a)
+        present = torch.bincount(rows.flatten(), minlength=n) > 0
         gain = (table - table.diagonal(dim1=1, dim2=2)[..., None])[:, present]  # (B, A, K)
         gain = gain.detach().amax(dim=(0, 1))  # per kind k, over the kinds a present
         useful = ((gain > 0) & present).nonzero().flatten()
@@ -774,7 +843,6 @@ class TRNet(nn.Module):
         masked = bool(top >= cost.detach() * FAR_BEYOND)
         # each cell's far(a, k) for the useful kinds k: one lookup in the B * K rows of the
         # tables, (U, B, H, W)
-        n = len(kinds)
         lookup = table[:, :, useful].permute(2, 0, 1).reshape(len(useful), b * n)
         cells = (rows + torch.arange(b, device=grids.device)[:, None] * n).flatten()
         scores = lookup.index_select(1, cells).view(len(useful), b, h, w)
@@ -792,32 +860,29 @@ class TRNet(nn.Module):
     def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
         b, h, w = grids.shape
-        kinds = code['kinds']
-        relations = code['relations'].expand(b, -1, -1)  # (B, Ki * Kj, 8)
-        # each entity kind's table row as a centre (i * Kj) and as a neighbour (j); -1: absent
-        n_kinds_j = len(kinds) + 1
-        row_i, centre = self.kind_rows(grids, kinds)  # (B, N)
-        row_j = row_i.clone()
-        row_j[self.phi.off_map] = len(kinds)
-        centre *= n_kinds_j
-        # one gather per offset, from that offset's column of the table
-        rows = [
-            centre + nbr.flatten(1)
-            for nbr in shifted(row_j[self.phi.pad_grid(grids)], self.cfg.radius)
-        ]  # per offset (B, N): the (kind_i, kind_j) row of each pair
-        r = torch.stack([relations[:, :, p].gather(1, row) for p, row in enumerate(rows)], -1)
-        z1 = r.max(dim=-1).values.view(b, h, w)
-        far = None if code['far'] is None else self.far_map(grids, kinds, code['far'])
+        kinds, relations = code['kinds'], code['relations']  # (B or 1, Ki * Kj, P)
+        n_rows, p = relations.shape[1:]
+        radius = self.cfg.radius
+        # each pair's (kind_i, kind_j) row, i * Kj + j, with j the off-map row past the border
+        centre = self.kind_rows(grids, kinds)  # (B, N)
+        around = F.pad(centre.view(b, h, w), (radius,) * 4, value=len(kinds))
+        neighbours = torch.stack(shifted(around, radius), -1).view(b, h * w, p)
+        pairs = centre[..., None] * (len(kinds) + 1) + neighbours  # (B, N, P)
+        # one gather from the flattened table: the pair's row * P + its offset
+        index = (pairs * p + torch.arange(p, device=grids.device)).view(b, -1)
+        r = relations.flatten(1).expand(b, -1).gather(1, index)
+        z1 = r.view(b, h * w, p).amax(-1).view(b, h, w)
+        far = None if code['far'] is None else self.far_map(grids, kinds, code['far'], centre)
         values = self.head(z1, code['head'].expand(b, -1), far)
         word_attention = None
         if return_aux and code['attention'] is not None:
             # the mean over the map's pairs: each kind pair's attention times its pair count
-            counts = torch.zeros(b, relations.shape[1], device=grids.device)
-            ones = torch.ones(1, device=grids.device).expand_as(centre)
-            for row in rows:
-                counts.scatter_add_(1, row, ones)
+            batch = torch.arange(b, device=grids.device)[:, None, None] * n_rows
+            counts = torch.bincount((pairs + batch).flatten(), minlength=b * n_rows)
             word_attention = torch.einsum(
-                'bm,bml->bl', counts / (len(rows) * h * w), code['attention'].expand(b, -1, -1)
+                'bm,bml->bl',
+                counts.view(b, n_rows).to(relations.dtype) / (p * h * w),
+                code['attention'].expand(b, -1, -1),
             )
         return outputs(values, z1, word_attention, return_aux)
 

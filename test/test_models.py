@@ -24,6 +24,7 @@ from spatial_grounding_ros.models import (
     relative_positions,
     shifted,
     squared_distances,
+    tanh,
     TRNet,
 )
 from spatial_grounding_ros.text import Vocabulary
@@ -137,17 +138,20 @@ def test_far_relation_and_head_text_learn_and_run_on_any_map(name):
 
 
 @pytest.mark.parametrize('log_cost', [-1.0, -7.0, -12.0])
-def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
+@pytest.mark.parametrize('shape', [(2, 5, 16), (1, 9, 12)], ids=['transforms', 'pairs'])
+def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost, shape):
     """
     Brute force: every cell i against every cell j within FAR_REACH rows and columns.
 
     At cost e^-1 the kinds that can raise a cell's floor reach a few cells; at e^-7 the 13
-    columns of FAR_REACH bound them on a 16-column map.
+    columns of FAR_REACH bound them on a 16-column map. A map within reach (9x12) takes far_map's
+    own every-pair path, the 16-column one its distance transforms.
     """
     torch.manual_seed(3)
     model = build_model('t-rnet', ModelConfig(vocab_size=6, far=True)).eval()
-    grids = torch.randint(0, 12, (2, 5, 16))
-    tokens = torch.tensor([[2, 3, 4], [5, 0, 0]])
+    batch, height, width = shape
+    grids = torch.randint(0, 12, shape)
+    tokens = torch.tensor([[2, 3, 4], [5, 0, 0]])[:batch]
     with torch.no_grad():
         model.far_log_cost.fill_(log_cost)
         kinds = present_kinds(grids, 12)
@@ -155,12 +159,12 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
         far = model.far_map(grids, kinds, table)
     row = {int(k): n for n, k in enumerate(kinds)}
     cost = float(np.exp(log_cost))
-    for b in range(2):
-        for r, c in np.ndindex(5, 16):
+    for b in range(batch):
+        for r, c in np.ndindex(height, width):
             want = max(
                 float(table[b, row[int(grids[b, r, c])], row[int(grids[b, rr, cc])]])
                 - cost * ((rr - r) ** 2 + (cc - c) ** 2)
-                for rr, cc in np.ndindex(5, 16)
+                for rr, cc in np.ndindex(height, width)
                 if max(abs(rr - r), abs(cc - c)) <= FAR_REACH
             )
             assert float(far[b, r, c]) == pytest.approx(want, abs=1e-5)
@@ -169,11 +173,11 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
     model.far_map(grids, kinds, table).sum().backward()
     got = table.grad.clone(), model.far_log_cost.grad.clone()
     table.grad, model.far_log_cost.grad = None, None
-    cells = torch.tensor(list(np.ndindex(5, 16)))
+    cells = torch.tensor(list(np.ndindex(height, width)))
     offset = cells[:, None] - cells[None]  # (i, j, 2)
     within = offset.abs().amax(-1) <= FAR_REACH
-    ids = torch.tensor([row[int(k)] for k in grids.flatten()]).view(2, -1)
-    pairs = torch.stack([table[b][ids[b][:, None], ids[b][None]] for b in range(2)])
+    ids = torch.tensor([row[int(k)] for k in grids.flatten()]).view(batch, -1)
+    pairs = torch.stack([table[b][ids[b][:, None], ids[b][None]] for b in range(batch)])
     scores = pairs - model.far_log_cost.exp() * (offset**2).sum(-1)
     scores.masked_fill(~within, float('-inf')).amax(-1).sum().backward()
     torch.testing.assert_close(got[0], table.grad)
@@ -188,6 +192,15 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost):
     assert model.far_log_cost.grad != 0
     with pytest.raises(ValueError, match='t-CNN has none'):
         build_model('t-cnn', ModelConfig(vocab_size=6, far=True))
+
+
+def test_training_tanh_is_tanh():
+    """The sigmoid form trained through is tanh, in value and in gradient."""
+    x = torch.linspace(-12, 12, 2001, dtype=torch.float64, requires_grad=True)
+    torch.testing.assert_close(tanh(x), torch.tanh(x), rtol=0, atol=1e-15)
+    assert torch.autograd.gradcheck(tanh, (x[::50].detach().clone().requires_grad_(),))
+    with torch.no_grad():  # no autograd call outside training: torch's own
+        assert torch.equal(tanh(x), torch.tanh(x))
 
 
 def test_isi_sizes():
