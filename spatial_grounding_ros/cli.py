@@ -18,6 +18,7 @@ import functools
 import json
 import sys
 
+from .allocator import keep_freed_memory
 from .datasets import DEFAULT_DATA, SPLITS
 from .tasks import TASKS
 
@@ -276,6 +277,7 @@ def _extensions():
 
 
 def main(argv: list[str] | None = None) -> int:
+    keep_freed_memory()  # before any tensor: a training step's tensors then reuse their memory
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

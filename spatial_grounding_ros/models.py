@@ -558,13 +558,14 @@ class TRNet(nn.Module):
         """
         Cut a parameter vector (..., 263) into the relation MLP's weights (..., out, in).
 
-        `first` > 0: the vector holds the weights of layers first, first + 1, ... only.
+        `first` > 0: the vector holds the weights of layers first, first + 1, ... only. (One
+        split, not a slice per layer: a slice's backward fills a zero tensor of the vector's
+        size, per layer.)
         """
-        weights, start = [], 0
-        for out, inp in self.layer_shapes[first:]:
-            weights.append(params[..., start:start + out * inp].unflatten(-1, (out, inp)))
-            start += out * inp
-        return weights
+        shapes = self.layer_shapes[first:]
+        sizes = [out * inp for out, inp in shapes]
+        parts = params.split([*sizes, params.shape[-1] - sum(sizes)], -1)
+        return [part.unflatten(-1, shape) for part, shape in zip(parts, shapes)]
 
     @staticmethod
     def relation_mlp(
@@ -673,38 +674,39 @@ class TRNet(nn.Module):
         k = embed.shape[1]
         if not self.attention_on:
             words = mean[:, None]  # one 'word': t-RNet's weights, shared by every pair
-        decoded = self.decoder(words)  # (B, L, 263): the words' relation MLPs and the head code
-        first = self.layer_shapes[0][0] * self.layer_shapes[0][1]
-        w1 = decoded[..., :first].unflatten(-1, self.layer_shapes[0])  # (B, L, out, 2k + 1)
+        # each word's relation MLP, (B, L, out, in) per layer
+        w1, *later = self.split_params(self.decoder(words))
         term_i = torch.einsum('id,blod->bilo', phi_i, w1[..., :k])  # (B, Ki, L, out)
         term_j = torch.einsum('jd,blod->bjlo', phi_j, w1[..., k:2 * k])  # (B, Kj, L, out)
+        # the later layers' weights side by side, each as (in, out): x @ w, no transpose
+        later = torch.cat([w.mT.flatten(-2) for w in later], -1)  # (B, L, 110)
         if self.attention_on:
-            # alpha ~ exp(h^T A [phi_i; phi_j]): an i part and a j part, (B, Ki, Kj, L)
+            # alpha ~ exp(h^T A [phi_i; phi_j]): an i part and a j part, (B, L, Ki, Kj). The
+            # softmax runs over dim 1: this torch's CPU softmax is 16x slower over a last
+            # dimension of about 12 (2 ms for a training batch)
             q = self.attn(words)  # (B, L, 2k)
-            score = (q[..., :k] @ phi_i.T).transpose(1, 2)[:, :, None] + (
-                q[..., k:] @ phi_j.T
-            ).transpose(1, 2)[:, None]
-            alpha = score.masked_fill(~mask[:, None, None], float('-inf')).softmax(-1)
-            fixed = torch.einsum('bijl,bilo->bijo', alpha, term_i) + torch.einsum(
-                'bijl,bjlo->bijo', alpha, term_j
+            score = (q[..., :k] @ phi_i.T)[..., :, None] + (q[..., k:] @ phi_j.T)[..., None, :]
+            alpha = score.masked_fill(~mask[:, :, None, None], float('-inf')).softmax(1)
+            fixed = torch.einsum('blij,bilo->bijo', alpha, term_i) + torch.einsum(
+                'blij,bjlo->bijo', alpha, term_j
             )
-            rows = alpha.flatten(1, 2)  # (B, R, L)
+            rows = alpha.flatten(2).transpose(1, 2)  # (B, R, L)
             slope = rows @ w1[..., 2 * k]  # (B, R, out): the position term's weights, mixed
+            later = rows @ later  # (B, R, 110): each row's own weights, mixed once
         else:
             fixed = term_i[:, :, None, 0] + term_j[:, None, :, 0]
             slope = w1[..., 2 * k]  # (B, 1, out)
         x = tanh(fixed.flatten(1, 2)[:, :, None] + rel[:, None] * slope[:, :, None])
-        later = decoded[..., first:self.relation_size]  # the later layers' weights per word
         b, r, p, _ = x.shape
-        if self.attention_on:  # each row's own weights, mixed once: (B, R, out, in) per layer
-            weights = self.split_params(rows @ later, first=1)
-        else:  # one set per instruction (B, 1, out, in): the rows' positions are one bmm's rows
-            weights = self.split_params(later, first=1)
+        if not self.attention_on:  # one set per instruction: the rows' positions are one bmm's
             x = x.reshape(b, 1, r * p, -1)
-        for n, w in enumerate(weights):
-            x = x @ w.mT
-            if n < len(weights) - 1:
-                x = tanh(x)
+        shapes = self.layer_shapes[1:]
+        parts = later.split([out * inp for out, inp in shapes], -1)
+        for n, (w, (out, inp)) in enumerate(zip(parts, shapes)):
+            if n < len(shapes) - 1:
+                x = tanh(x @ w.unflatten(-1, (inp, out)))
+            else:  # the output (out = 1): a product and a sum, not a matmul of one column
+                x = (x * w.unsqueeze(-2)).sum(-1)
         return x.view(b, r, p), rows if self.attention_on else None
 
     def forward(

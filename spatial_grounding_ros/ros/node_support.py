@@ -38,6 +38,7 @@ from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from std_msgs.msg import Header
 
+from ..allocator import keep_freed_memory
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
@@ -200,6 +201,7 @@ def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None
     """Make the node, spin it until Ctrl-C or shutdown, and exit: 1 after a start-up error."""
     # a crash in a C library (DDS, torch) then leaves a Python traceback in the log
     faulthandler.enable()
+    keep_freed_memory()  # a large map's tensors reuse the last one's memory
     code = _run(make_node, name, args)
     # The node is destroyed and the context shut down (which also closes ROS logging). A normal
     # exit would now run torch's and Fast DDS's C++ static destructors, whose relative order is
