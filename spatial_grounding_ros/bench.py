@@ -12,6 +12,8 @@
   fits --reference-max-call), in the same run, so their ratios hold across machines; and the
   peak RSS of grounding at that size;
 - throughput of one batched forward over 512 maps of 10x10;
+- one training step (forward, loss, backward, Adam) on a batch of 64 generated 10x10 maps, with
+  attention off (the warm-up epochs) and on, for a fresh model of the checkpoint's config;
 - end-to-end ROS latency, instruction published -> goal_pose received (ros/bench_ros.py);
 - memory: this process's RSS after 100 and after 10,000 Grounder.ground() requests.
 Results go to one JSON file with the machine's description and which targets were met, and its
@@ -33,6 +35,7 @@ from tqdm import tqdm
 from .generator import generate, global_goals, local_goals, random_grid
 from .grounder import DEFAULT_CHECKPOINT, Grounder
 from .measure import peak_rss_mb, percentiles, reset_peak_rss, rss_mb
+from .models import build_model, ModelConfig
 from .options import ranged
 
 SIZES = (10, 32, 64, 128, 256, 512, 1024)
@@ -169,6 +172,40 @@ def batch_throughput(grounder: Grounder, batch: int, reps: int) -> dict:
     }
 
 
+def training_step(grounder: Grounder, batch: int, budget_s: float) -> dict:
+    """
+    Time one training step of a fresh model of the checkpoint's kind: attention off and on.
+
+    A batch of `batch` generated 10x10 maps (every family), the MSE, the backward and an Adam
+    step, as `train` takes them (its attention warm-up trains with attention off).
+    """
+    loaded = grounder.loaded
+    torch.manual_seed(0)
+    model = build_model(loaded.name, ModelConfig.from_dict(loaded.header['config'])).train()
+    data = generate(batch, seed=3, mode='mixed', size=10)
+    grids = torch.as_tensor(data.grids)
+    tokens = torch.as_tensor(grounder.vocab.encode_batch(data.instructions))
+    values = torch.as_tensor(data.values)
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+
+    def step():
+        loss = torch.mean((model(grids, tokens) - values) ** 2)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+
+    result = {'batch': batch, 'map': '10x10', 'model': loaded.name}
+    for attention in (False, True) if hasattr(model, 'attention_on') else (False,):
+        if attention:  # as trained: the attention's projection away from its zero start
+            model.attention_on = True
+            torch.nn.init.normal_(model.attn.weight)
+        elif hasattr(model, 'attention_on'):
+            model.attention_on = False
+        name = 'attention_on' if attention else 'attention_off'
+        result[name] = timed(step, budget_s, 300, f'training step, {name.replace("_", " ")}')
+    return result
+
+
 def memory_growth(grounder: Grounder, early: int, total: int) -> dict:
     if total <= early:
         raise ValueError(f'--memory-requests must be more than {early}')
@@ -209,6 +246,7 @@ def run(args) -> dict:
             reference_s_per_cell = row['reference']['p50_ms'] / 1e3 / size**2
         result['sizes'].append(row)
     result['throughput'] = batch_throughput(grounder, args.batch, args.batch_reps)
+    result['training_step'] = training_step(grounder, args.train_batch, args.budget)
     if not args.skip_ros:
         from .ros.bench_ros import round_trip_latency
 
@@ -286,6 +324,18 @@ def table(result: dict) -> str:
         f'{throughput["maps_per_second"]:.0f} maps/s ({throughput["median_batch_ms"]:.0f} ms '
         'per batch).'
     )
+    step = result.get('training_step')
+    if step:
+        lines.append(
+            f'Training step ({step["model"]}, a batch of {step["batch"]} generated maps of '
+            f'{step["map"]}: forward, MSE, backward, Adam): '
+            + ', '.join(
+                f'{step[name]["p50_ms"]:.1f} ms with {name.replace("_", " ")}'
+                for name in ('attention_off', 'attention_on')
+                if name in step
+            )
+            + '.'
+        )
     ros = result.get('ros_end_to_end')
     if ros:
         lines.append(
@@ -352,6 +402,12 @@ def register_cli(subparsers) -> None:
         help='maps of 10x10 in the batched forward',
     )
     b.add_argument('--batch-reps', type=ranged(int, low=1), default=5)
+    b.add_argument(
+        '--train-batch',
+        type=ranged(int, low=1),
+        default=64,
+        help="maps of 10x10 in the timed training step (train's batch size)",
+    )
     b.add_argument(
         '--ros-requests',
         type=ranged(int, low=1),

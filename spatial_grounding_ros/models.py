@@ -223,6 +223,23 @@ def present_kinds(grids: torch.Tensor, n_entities: int) -> torch.Tensor:
     return torch.bincount(grids.flatten(), minlength=n_entities).nonzero().flatten()
 
 
+def kinds_per_map(grids: torch.Tensor, n_kinds: int, off_map: int) -> torch.Tensor:
+    """
+    Return each map's kinds (B, K), ascending, K the most any map of `grids` (B, H, W) holds.
+
+    A map with fewer is padded with kinds it does not hold (never `off_map`, the neighbour
+    kind past the border): their table rows are scored and never read. `n_kinds`: the
+    entity table's rows, unseen and distractor kinds included.
+    """
+    b = grids.shape[0]
+    held = torch.zeros(b, n_kinds, dtype=torch.int8, device=grids.device)
+    held.scatter_(1, grids.flatten(1), 1)
+    held[:, off_map] = -1  # last in the order below: never a padding kind
+    count = int(held.eq(1).sum(1).max())
+    # held kinds first, then the absent ones, each ascending (a stable sort)
+    return held.argsort(dim=1, descending=True, stable=True)[:, :count]
+
+
 def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool):
     """Return a model's output: the value map, and with return_aux Z1 and the attention."""
     return (values, {'relation_map': z1, 'attention': attention}) if return_aux else values
@@ -661,6 +678,7 @@ class TRNet(nn.Module):
         """
         Score every (kind_i, kind_j) of `kinds` x `kinds_j` at each position code of `rel` (P,).
 
+        `kinds` and `kinds_j` are (K,), one table for every instruction, or (B, K), one each.
         Returns r (B, Ki * Kj, P), row i * Kj + j, and the attention over words of each row
         (B, Ki * Kj, L), or None without attention. A pair's attention has no position term,
         so a row mixes the words' weights once for all its positions, where a map's pairs
@@ -670,14 +688,15 @@ class TRNet(nn.Module):
         """
         words, mask, mean = text  # (B, L, 30), (B, L), (B, 30)
         embed = self.phi.embed.weight
-        phi_i, phi_j = embed[kinds], embed[kinds_j]  # (Ki, k), (Kj, k)
-        k = embed.shape[1]
+        b, k = len(words), embed.shape[1]
+        # (B, Ki, k), (B, Kj, k)
+        phi_i, phi_j = (embed[kinds].expand(b, -1, -1) for kinds in (kinds, kinds_j))
         if not self.attention_on:
             words = mean[:, None]  # one 'word': t-RNet's weights, shared by every pair
         # each word's relation MLP, (B, L, out, in) per layer
         w1, *later = self.split_params(self.decoder(words))
-        term_i = torch.einsum('id,blod->bilo', phi_i, w1[..., :k])  # (B, Ki, L, out)
-        term_j = torch.einsum('jd,blod->bjlo', phi_j, w1[..., k:2 * k])  # (B, Kj, L, out)
+        term_i = torch.einsum('bid,blod->bilo', phi_i, w1[..., :k])  # (B, Ki, L, out)
+        term_j = torch.einsum('bjd,blod->bjlo', phi_j, w1[..., k:2 * k])  # (B, Kj, L, out)
         # the later layers' weights side by side, each as (in, out): x @ w, no transpose
         later = torch.cat([w.mT.flatten(-2) for w in later], -1)  # (B, L, 110)
         if self.attention_on:
@@ -685,7 +704,7 @@ class TRNet(nn.Module):
             # softmax runs over dim 1: this torch's CPU softmax is 16x slower over a last
             # dimension of about 12 (2 ms for a training batch)
             q = self.attn(words)  # (B, L, 2k)
-            score = (q[..., :k] @ phi_i.T)[..., :, None] + (q[..., k:] @ phi_j.T)[..., None, :]
+            score = (q[..., :k] @ phi_i.mT)[..., :, None] + (q[..., k:] @ phi_j.mT)[..., None, :]
             alpha = score.masked_fill(~mask[:, :, None, None], float('-inf')).softmax(1)
             fixed = torch.einsum('blij,bilo->bijo', alpha, term_i) + torch.einsum(
                 'blij,bjlo->bijo', alpha, term_j
@@ -697,7 +716,7 @@ class TRNet(nn.Module):
             fixed = term_i[:, :, None, 0] + term_j[:, None, :, 0]
             slope = w1[..., 2 * k]  # (B, 1, out)
         x = tanh(fixed.flatten(1, 2)[:, :, None] + rel[:, None] * slope[:, :, None])
-        b, r, p, _ = x.shape
+        r, p = x.shape[1:3]
         if not self.attention_on:  # one set per instruction: the rows' positions are one bmm's
             x = x.reshape(b, 1, r * p, -1)
         shapes = self.layer_shapes[1:]
@@ -719,16 +738,18 @@ class TRNet(nn.Module):
         """
         Value maps (B, H, W) for grids (B, H, W) and tokens (B, L).
 
-        reference=True scores every cell pair of the maps (the definition); otherwise the
-        relation table over the kinds present is used when it is the cheaper (a table row is a
+        reference=True scores every cell pair of the maps (the definition); otherwise each
+        map's relation table over the kinds it holds is used when it is the cheaper (a table
+        row is a
         (kind_i, kind_j) pair with a column per offset, a map row a cell with its 8
         neighbours). Without attention that is when it has fewer rows than the maps have
-        cells: a 10x10 batch with all 12 kinds has 12 x 13 = 156 rows against 100 cells. With
+        cells: a 10x10 map with all 12 kinds has 12 x 13 = 156 rows against 100 cells. With
         attention each of a map's pairs mixes the L words' weights, a table row mixes them
         once for all its offsets, so the table wins on any map but the smallest.
         """
-        kinds = present_kinds(grids, self.cfg.n_entities)
-        rows, cells = len(kinds) * (len(kinds) + 1), grids.shape[1] * grids.shape[2]
+        kinds = kinds_per_map(grids, self.phi.embed.num_embeddings, self.phi.off_map)
+        n_kinds = kinds.shape[1]
+        rows, cells = n_kinds * (n_kinds + 1), grids.shape[1] * grids.shape[2]
         offsets = len(neighbour_offsets(self.cfg.radius))
         words = tokens.shape[1] if self.attention_on else 0
         if reference or rows * (offsets + words) >= cells * offsets * max(words, 1):
@@ -763,11 +784,12 @@ class TRNet(nn.Module):
         offset (its score has no offset term), or None; and the head's code (B, code_size).
         The centre kinds are `kinds` (default: all), the neighbour kinds those and the off-map
         one: a caller that keeps this per instruction grounds it on any map with a gather and a
-        max.
+        max. `kinds` (B, K): a table of each instruction's own kinds (kinds_per_map).
         """
         if kinds is None:
             kinds = torch.arange(self.cfg.n_entities, device=tokens.device)
-        kinds_j = torch.cat([kinds, kinds.new_tensor([self.phi.off_map])])
+        off_map = kinds.new_full((*kinds.shape[:-1], 1), self.phi.off_map)
+        kinds_j = torch.cat([kinds, off_map], -1)
         n_nbrs = len(neighbour_offsets(self.cfg.radius))
         text = self.text(tokens)
         # the far relation's position is a ninth column of the same rows: one pass scores both
@@ -778,7 +800,7 @@ class TRNet(nn.Module):
         r, attention = self.table(kinds, kinds_j, text, rel)
         far = None
         if self.cfg.far:
-            far = r[..., n_nbrs].unflatten(1, (len(kinds), len(kinds_j)))[..., :-1]
+            far = r[..., n_nbrs].unflatten(1, (kinds.shape[-1], kinds_j.shape[-1]))[..., :-1]
         return {
             'kinds': kinds,
             'relations': r[..., :n_nbrs],
@@ -788,19 +810,26 @@ class TRNet(nn.Module):
         }
 
     def kind_rows(self, grids: torch.Tensor, kinds: torch.Tensor) -> torch.Tensor:
-        """Return each cell's row in a table over `kinds`, (B, H*W); a kind it lacks: an error."""
-        row = torch.full((self.phi.embed.num_embeddings,), -1, device=grids.device)
-        row[kinds] = torch.arange(len(kinds), device=grids.device)
-        cells = row[grids].flatten(1)
+        """
+        Return each cell's row in a table over `kinds`, (B, H*W); a kind it lacks: an error.
+
+        `kinds` (K,): one table for every map; (B, K): one per map.
+        """
+        n = kinds.shape[-1]
+        row = torch.full(
+            (*kinds.shape[:-1], self.phi.embed.num_embeddings), -1, device=grids.device
+        )
+        row.scatter_(-1, kinds, torch.arange(n, device=grids.device).expand_as(kinds))
+        cells = row[grids].flatten(1) if kinds.dim() == 1 else row.gather(1, grids.flatten(1))
         if cells.min() < 0:
-            missing = sorted(set(grids.unique().tolist()) - set(kinds.tolist()))
+            missing = sorted(set(grids.flatten(1)[cells < 0].tolist()))
             raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
         return cells
 
     def far_table(self, text: tuple, kinds: torch.Tensor) -> torch.Tensor:
         """Score each (kind_i, kind_j) of `kinds` with the far relation: (B, K, K)."""
         r, _ = self.table(kinds, kinds, text, torch.tensor([FAR_POSITION], device=kinds.device))
-        return r.view(-1, len(kinds), len(kinds))
+        return r.view(-1, kinds.shape[-1], kinds.shape[-1])
 
     def far_map(
         self,
@@ -826,7 +855,7 @@ class TRNet(nn.Module):
             rows = self.kind_rows(grids, kinds)  # (B, H*W): each cell's row of the table
         table = table.expand(b, -1, -1)
         cost = self.far_log_cost.exp()
-        n = len(kinds)
+        n = kinds.shape[-1]
         if h <= FAR_REACH + 1 and w <= FAR_REACH + 1 and b * (h * w) ** 2 <= FAR_PAIRS:
             pairs = (rows[:, :, None] * n + rows[:, None, :]).flatten(1)  # (B, N * N)
             scores = table.flatten(1).gather(1, pairs).view(b, h * w, h * w)
@@ -850,9 +879,9 @@ class TRNet(nn.Module):
         scores = lookup.index_select(1, cells).view(len(useful), b, h, w)
         chunk = max(1, FAR_CHUNK_CELLS // (b * h * w))
         for start in range(0, len(useful), chunk):
-            ks = kinds[useful[start:start + chunk]]
+            ks = kinds[..., useful[start:start + chunk]].expand(b, -1)  # (B, U): each map's
             with torch.no_grad():
-                dist = squared_distances(grids[:, None] == ks[None, :, None, None], reach)
+                dist = squared_distances(grids[:, None] == ks[:, :, None, None], reach)
             near = scores[start:start + chunk].transpose(0, 1).addcmul(dist, -cost)
             if masked:
                 near = near.masked_fill(dist >= FAR_BEYOND, float('-inf'))
@@ -866,10 +895,11 @@ class TRNet(nn.Module):
         n_rows, p = relations.shape[1:]
         radius = self.cfg.radius
         # each pair's (kind_i, kind_j) row, i * Kj + j, with j the off-map row past the border
+        n_kinds = kinds.shape[-1]
         centre = self.kind_rows(grids, kinds)  # (B, N)
-        around = F.pad(centre.view(b, h, w), (radius,) * 4, value=len(kinds))
+        around = F.pad(centre.view(b, h, w), (radius,) * 4, value=n_kinds)
         neighbours = torch.stack(shifted(around, radius), -1).view(b, h * w, p)
-        pairs = centre[..., None] * (len(kinds) + 1) + neighbours  # (B, N, P)
+        pairs = centre[..., None] * (n_kinds + 1) + neighbours  # (B, N, P)
         # one gather from the flattened table: the pair's row * P + its offset
         index = (pairs * p + torch.arange(p, device=grids.device)).view(b, -1)
         r = relations.flatten(1).expand(b, -1).gather(1, index)

@@ -45,6 +45,8 @@ def test_bench_writes_every_section(tmp_path):
                     '16',
                     '--batch-reps',
                     '1',
+                    '--train-batch',
+                    '4',
                     '--ros-requests',
                     '5',
                     '--memory-requests',
@@ -65,6 +67,9 @@ def test_bench_writes_every_section(tmp_path):
         assert row['ground_over_head'] == row['ground_cached']['p50_ms'] / row['head']['p50_ms']
         assert row['peak_rss_mb'] > 0 and row['reference_peak_rss_mb'] > 0
     assert result['throughput']['batch'] == 16 and result['throughput']['maps_per_second'] > 0
+    step = result['training_step']
+    assert step['batch'] == 4 and step['model'] == 't-rnet-attn'
+    assert 0 < step['attention_off']['p50_ms'] and 0 < step['attention_on']['p50_ms']
     ros = result['ros_end_to_end']
     assert ros['requests'] == 5 and 0 < ros['p50_ms'] <= ros['p99_ms']
     assert ros['node_rss_mb_end'] > 0
@@ -75,6 +80,7 @@ def test_bench_writes_every_section(tmp_path):
     # the markdown table beside the JSON is the JSON's table
     assert out.with_suffix('.md').read_text() == bench.table(result)
     assert '| 16x16 |' in bench.table(result)
+    assert 'Training step (t-rnet-attn, a batch of 4 generated maps' in bench.table(result)
 
 
 def test_bench_skips_a_reference_over_its_budget(tmp_path):
@@ -83,7 +89,7 @@ def test_bench_skips_a_reference_over_its_budget(tmp_path):
     threads = torch.get_num_threads()
     try:
         arguments = ['bench', '--out', str(out), '--sizes', '10', '40', '--budget', '0.05']
-        arguments += ['--batch', '4', '--batch-reps', '1', '--skip-ros']
+        arguments += ['--batch', '4', '--batch-reps', '1', '--train-batch', '4', '--skip-ros']
         arguments += ['--memory-requests', '101', '--reference-max-call', '1e-6']
         assert cli.main(arguments) == 0
     finally:

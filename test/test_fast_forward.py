@@ -19,7 +19,14 @@ from spatial_grounding_ros import generator
 from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
 from spatial_grounding_ros.entities import ISI
 from spatial_grounding_ros.grounder import Grounder
-from spatial_grounding_ros.models import build_model, gradient_maps, ModelConfig, present_kinds
+from spatial_grounding_ros.models import (
+    build_model,
+    distractor_kind_ids,
+    gradient_maps,
+    kinds_per_map,
+    ModelConfig,
+    present_kinds,
+)
 from spatial_grounding_ros.text import Vocabulary
 import torch
 
@@ -120,6 +127,49 @@ def test_table_gradients_equal_pair_gradients(name, size):
     for pname, grad in reference.items():
         assert grad.abs().sum() > 0, pname
         torch.testing.assert_close(fast[pname], grad, rtol=1e-4, atol=1e-6, msg=pname)
+
+
+def test_kinds_per_map_are_each_maps_own_then_absent_ones():
+    grids = torch.tensor([[[0, 3], [3, 5]], [[7, 7], [7, 7]]])
+    kinds = kinds_per_map(grids, n_kinds=13, off_map=12)
+    assert kinds.tolist() == [[0, 3, 5], [7, 0, 1]]  # map 1 holds only 7: padded, ascending
+    # the off-map kind is never a padding kind, however few kinds are absent
+    assert 2 not in kinds_per_map(torch.tensor([[[0]], [[1]]]), n_kinds=3, off_map=2)
+
+
+@pytest.mark.parametrize('shape', [(9, 12), (11, 14)], ids=['far pairs', 'far transforms'])
+def test_per_map_tables_equal_pairs(shape):
+    """
+    Maps holding different kinds, distractor kinds among them, each get a table of their own.
+
+    The forward's per-map tables (padded to the most kinds a map holds) give the reference's
+    values, Z1, attention and gradients, with the far relation on both of its paths.
+    """
+    vocab, grids, tokens = inputs(shape, 12, seed=13)
+    views = {'axial': True, 'head_text': True, 'far': True}
+    model = random_model('t-rnet-attn', len(vocab), seed=14, distractor_kinds=4, **views)
+    distractors = distractor_kind_ids(model.cfg)
+    with torch.no_grad():  # training redraws these rows at every step; here, once
+        model.phi.embed.weight[distractors] = torch.randn(len(distractors), model.cfg.embed_dim)
+    grids[1] = grids[1] % 3
+    grids[1, :3, :3] = distractors[0]
+    grids[2, 4, 5] = distractors[3]
+    kinds = kinds_per_map(grids, model.phi.embed.num_embeddings, model.phi.off_map)
+    assert kinds[0, 0] == 0 and (kinds[1, :4] == torch.tensor([0, 1, 2, distractors[0]])).all()
+    assert model.phi.off_map not in kinds
+    with torch.no_grad():
+        assert_same(
+            model(grids, tokens, return_aux=True),
+            model(grids, tokens, return_aux=True, reference=True),
+        )
+    target = torch.randn(len(grids), *shape)
+    gradients = []
+    for reference in (True, False):
+        model.zero_grad()
+        ((model(grids, tokens, reference=reference) - target) ** 2).mean().backward()
+        gradients.append({n: p.grad.clone() for n, p in model.named_parameters()})
+    for name, grad in gradients[0].items():
+        torch.testing.assert_close(gradients[1][name], grad, rtol=1e-4, atol=1e-6, msg=name)
 
 
 def test_t_cnn_text_code_serves_any_map():
