@@ -81,8 +81,8 @@ class Grounder:
                     f'grid must hold integer entity indices, got {grid.dtype} values such as '
                     f'{not_whole[0].item()!r}'
                 )
-        bad = np.unique(grid[(grid < 0) | (grid >= len(self.entities))])
-        if bad.size:
+        if grid.min() < 0 or grid.max() >= len(self.entities):
+            bad = np.unique(grid[(grid < 0) | (grid >= len(self.entities))])
             raise ValueError(
                 f'grid holds entity values {bad.tolist()[:10]} outside the '
                 f'{self.entities.domain} table (0..{len(self.entities) - 1})'

@@ -909,13 +909,12 @@ class TRNet(nn.Module):
         word_attention = None
         if return_aux and code['attention'] is not None:
             # the mean over the map's pairs: each kind pair's attention times its pair count
-            batch = torch.arange(b, device=grids.device)[:, None, None] * n_rows
-            counts = torch.bincount((pairs + batch).flatten(), minlength=b * n_rows)
-            word_attention = torch.einsum(
-                'bm,bml->bl',
-                counts.view(b, n_rows).to(relations.dtype) / (p * h * w),
-                code['attention'].expand(b, -1, -1),
-            )
+            if b > 1:
+                pairs = pairs + torch.arange(b, device=grids.device)[:, None, None] * n_rows
+            counts = torch.bincount(pairs.flatten(), minlength=b * n_rows).to(relations.dtype)
+            word_attention = (counts.view(b, 1, n_rows) @ code['attention'].expand(b, -1, -1))[
+                :, 0
+            ] / (p * h * w)
         return outputs(values, z1, word_attention, return_aux)
 
 
