@@ -48,14 +48,15 @@ reproduce-rl: $(STAMP)
 reproduce-shapeworld: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce-shapeworld --out results
 
-# The robustness study on the shipped per-task checkpoints (t-RNetAttn, t-RNet, t-CNN where
-# shipped; about 40 minutes on 2 busy cores): results/robustness.json, .md, .png; and the
-# README's explain figures (PW local test examples 6 and 8, and 6 under noise)
-EXPLAIN := $(VENV)/bin/spatial-grounding explain --checkpoint pw-local_t-rnet-attn --task pw-local $(DATA_ARG)
+# The robustness study on the shipped checkpoints (t-RNetAttn, t-RNet, t-CNN where shipped;
+# about 3 minutes on 2 cores): results/robustness.json, .md, .png; and the
+# README's explain figures of the node's default (PW local test examples 6 and 41, and 6
+# under noise)
+EXPLAIN := $(VENV)/bin/spatial-grounding explain --checkpoint pw_t-rnet-attn --task pw-local $(DATA_ARG)
 reproduce-robustness: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce-robustness $(DATA_ARG) --out results
 	$(EXPLAIN) --index 6 --out results/explain_success.png
-	$(EXPLAIN) --index 8 --out results/explain_failure.png
+	$(EXPLAIN) --index 41 --out results/explain_failure.png
 	$(EXPLAIN) --index 6 --obs-noise 10 --text-noise 3 --out results/explain_noise.png
 
 bench: $(STAMP)
