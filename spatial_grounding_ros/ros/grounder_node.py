@@ -74,7 +74,7 @@ PARAMETERS = (
         'max_cells',
         1024 * 1024,
         'larger entity maps are rejected (work and memory grow with the cells: a 1024x1024 '
-        'map grounds in about 0.5 s, peak RSS under 0.6 GB)',
+        'map grounds in about 1.1 s, peak RSS under 1 GB)',
         low=1,
         high=4096 * 4096,
     ),
