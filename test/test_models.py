@@ -194,13 +194,14 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost, sh
         build_model('t-cnn', ModelConfig(vocab_size=6, far=True))
 
 
-def test_training_tanh_is_tanh():
-    """The sigmoid form trained through is tanh, in value and in gradient."""
+def test_sigmoid_form_tanh_is_tanh():
+    """The sigmoid form the relation MLP uses is tanh, in value and in gradient."""
     x = torch.linspace(-12, 12, 2001, dtype=torch.float64, requires_grad=True)
-    torch.testing.assert_close(tanh(x), torch.tanh(x), rtol=0, atol=1e-15)
+    trained = tanh(x)
+    torch.testing.assert_close(trained, torch.tanh(x), rtol=0, atol=1e-15)
     assert torch.autograd.gradcheck(tanh, (x[::50].detach().clone().requires_grad_(),))
-    with torch.no_grad():  # no autograd call outside training: torch's own
-        assert torch.equal(tanh(x), torch.tanh(x))
+    with torch.no_grad():  # no autograd call outside training, the same numbers
+        assert torch.equal(tanh(x), trained.detach())
 
 
 def test_isi_sizes():
