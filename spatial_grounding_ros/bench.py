@@ -195,13 +195,12 @@ def training_step(grounder: Grounder, batch: int, budget_s: float) -> dict:
         opt.step()
 
     result = {'batch': batch, 'map': '10x10', 'model': loaded.name}
-    for attention in (False, True) if hasattr(model, 'attention_on') else (False,):
-        if attention:  # as trained: the attention's projection away from its zero start
-            model.attention_on = True
+    with_attention = getattr(model, 'attention', False)  # t-RNetAttn; the others have none
+    for name in ('attention_off', 'attention_on') if with_attention else ('attention_off',):
+        if with_attention:
+            model.attention_on = name == 'attention_on'
+        if name == 'attention_on':  # as trained: its projection away from the zero start
             torch.nn.init.normal_(model.attn.weight)
-        elif hasattr(model, 'attention_on'):
-            model.attention_on = False
-        name = 'attention_on' if attention else 'attention_off'
         result[name] = timed(step, budget_s, 300, f'training step, {name.replace("_", " ")}')
     return result
 

@@ -726,11 +726,11 @@ class TRNet(nn.Module):
         if not self.attention_on:  # one set per instruction: the rows' positions are one bmm's
             x = x.reshape(b, 1, r * p, -1)
         shapes = self.layer_shapes[1:]
-        parts = later.split([out * inp for out, inp in shapes], -1)
-        for n, (w, (out, inp)) in enumerate(zip(parts, shapes)):
+        parts = later.split([n_out * n_in for n_out, n_in in shapes], -1)
+        for n, (w, (n_out, n_in)) in enumerate(zip(parts, shapes)):
             if n < len(shapes) - 1:
-                x = tanh(x @ w.unflatten(-1, (inp, out)))
-            else:  # the output (out = 1): a product and a sum, not a matmul of one column
+                x = tanh(x @ w.unflatten(-1, (n_in, n_out)))
+            else:  # the output (one unit): a product and a sum, not a matmul of one column
                 x = (x * w.unsqueeze(-2)).sum(-1)
         return x.view(b, r, p), rows if self.attention_on else None
 
