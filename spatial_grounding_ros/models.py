@@ -499,6 +499,11 @@ def pair_distances(height: int, width: int, device=None) -> torch.Tensor:
     return ((cells[:, None] - cells[None]) ** 2).sum(-1)
 
 
+def sigmoid_tanh(x: torch.Tensor) -> torch.Tensor:
+    """Return 2 sigmoid(2x) - 1, which is tanh(x) (see Tanh)."""
+    return torch.sigmoid(x * 2).mul_(2).sub_(1)
+
+
 class Tanh(torch.autograd.Function):
     """
     tanh, computed as 2 sigmoid(2x) - 1 (the same function).
@@ -511,7 +516,7 @@ class Tanh(torch.autograd.Function):
 
     @staticmethod
     def forward(ctx, x: torch.Tensor) -> torch.Tensor:
-        y = torch.sigmoid(x * 2).mul_(2).sub_(1)
+        y = sigmoid_tanh(x)
         ctx.save_for_backward(y)
         return y
 
@@ -523,9 +528,7 @@ class Tanh(torch.autograd.Function):
 
 def tanh(x: torch.Tensor) -> torch.Tensor:
     """Return the tanh of x as Tanh computes it, with no autograd call when none is needed."""
-    if x.requires_grad and torch.is_grad_enabled():
-        return Tanh.apply(x)
-    return torch.sigmoid(x * 2).mul_(2).sub_(1)
+    return Tanh.apply(x) if x.requires_grad and torch.is_grad_enabled() else sigmoid_tanh(x)
 
 
 def build_head(cfg: ModelConfig) -> OutputHead:
@@ -570,22 +573,19 @@ class TRNet(nn.Module):
         self.head = build_head(cfg)
         sizes = [2 * cfg.embed_dim + 1, *cfg.mlp, 1]
         self.layer_shapes = list(zip(sizes[1:], sizes[:-1]))  # (out, in) per layer
-        self.relation_size = sum(out * inp for out, inp in self.layer_shapes)  # 260 of the 263
         if cfg.far:
             self.far_log_cost = nn.Parameter(torch.tensor(FAR_LOG_COST))
 
-    def split_params(self, params: torch.Tensor, first: int = 0) -> list[torch.Tensor]:
+    def split_params(self, params: torch.Tensor) -> list[torch.Tensor]:
         """
         Cut a parameter vector (..., 263) into the relation MLP's weights (..., out, in).
 
-        `first` > 0: the vector holds the weights of layers first, first + 1, ... only. (One
-        split, not a slice per layer: a slice's backward fills a zero tensor of the vector's
-        size, per layer.)
+        One split, not a slice per layer: a slice's backward fills a zero tensor of the
+        vector's size, per layer.
         """
-        shapes = self.layer_shapes[first:]
-        sizes = [out * inp for out, inp in shapes]
+        sizes = [out * inp for out, inp in self.layer_shapes]
         parts = params.split([*sizes, params.shape[-1] - sum(sizes)], -1)
-        return [part.unflatten(-1, shape) for part, shape in zip(parts, shapes)]
+        return [part.unflatten(-1, shape) for part, shape in zip(parts, self.layer_shapes)]
 
     @staticmethod
     def relation_mlp(
@@ -697,13 +697,13 @@ class TRNet(nn.Module):
         if not self.attention_on:
             words = mean[:, None]  # one 'word': t-RNet's weights, shared by every pair
         # each word's relation MLP, (B, L, out, in) per layer
-        w1, *later = self.split_params(self.decoder(words))
+        w1, *later_layers = self.split_params(self.decoder(words))
         n_words, out = w1.shape[1:3]
         # each kind's i and j terms for every word: (B, Ki, L, out), (B, Kj, L, out)
         term_i = (phi_i @ w1[..., :k].flatten(1, 2).mT).unflatten(-1, (n_words, out))
         term_j = (phi_j @ w1[..., k:2 * k].flatten(1, 2).mT).unflatten(-1, (n_words, out))
         # the later layers' weights side by side, each as (in, out): x @ w, no transpose
-        later = torch.cat([w.mT.flatten(-2) for w in later], -1)  # (B, L, 110)
+        later = torch.cat([w.mT.flatten(-2) for w in later_layers], -1)  # (B, L, 110)
         if self.attention_on:
             # alpha ~ exp(h^T A [phi_i; phi_j]): an i part and a j part, (B, L, Ki, Kj). The
             # softmax runs over dim 1: this torch's CPU softmax is 16x slower over a last
@@ -746,8 +746,7 @@ class TRNet(nn.Module):
 
         reference=True scores every cell pair of the maps (the definition); otherwise each
         map's relation table over the kinds it holds is used when it is the cheaper (a table
-        row is a
-        (kind_i, kind_j) pair with a column per offset, a map row a cell with its 8
+        row is a (kind_i, kind_j) pair with a column per offset, a map row a cell with its 8
         neighbours). Without attention that is when it has fewer rows than the maps have
         cells: a 10x10 map with all 12 kinds has 12 x 13 = 156 rows against 100 cells. With
         attention each of a map's pairs mixes the L words' weights, a table row mixes them
@@ -821,12 +820,10 @@ class TRNet(nn.Module):
 
         `kinds` (K,): one table for every map; (B, K): one per map.
         """
-        n = kinds.shape[-1]
-        row = torch.full(
-            (*kinds.shape[:-1], self.phi.embed.num_embeddings), -1, device=grids.device
-        )
-        row.scatter_(-1, kinds, torch.arange(n, device=grids.device).expand_as(kinds))
-        cells = row[grids].flatten(1) if kinds.dim() == 1 else row.gather(1, grids.flatten(1))
+        kinds = kinds.expand(len(grids), -1)  # a shared table: the same kinds for every map
+        row = torch.full((len(grids), self.phi.embed.num_embeddings), -1, device=grids.device)
+        row.scatter_(1, kinds, torch.arange(kinds.shape[1], device=grids.device).expand_as(kinds))
+        cells = row.gather(1, grids.flatten(1))
         if cells.min() < 0:
             missing = sorted(set(grids.flatten(1)[cells < 0].tolist()))
             raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
