@@ -67,8 +67,8 @@ _PW = {
 # PW local's and PW global's own recipe (the paper's per-task rows): the generated worlds of
 # every family are what the node's default needs for clear references on maps of any size; on
 # one task's 10x10 human test maps they cost time and MSE. Without them, with a light goal
-# cross-entropy (PW local t-RNetAttn test MSE 0.278 at weight 1, 0.142-0.147 at 0.1, 0.127 at
-# 0.05) and 30 epochs, t-RNetAttn trains in 2.2 minutes on 2 cores and is ahead of the previous
+# cross-entropy (PW local t-RNetAttn test MSE 0.278 at weight 1, 0.142-0.147 at 0.1, 0.127-0.135
+# at 0.05) and 30 epochs, t-RNetAttn trains in 2.2 minutes on 2 cores and is ahead of the previous
 # recipe's 7 minutes on every metric (docs/benchmarks.md).
 _PW_ONE_MODE = {**_PW, 'epochs': 30, 'synthetic': 0, 'goal_weight': 0.05}
 
