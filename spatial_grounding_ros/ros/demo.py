@@ -60,6 +60,12 @@ RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
     'terminated': 'std_msgs/msg/Bool',
     'diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
 }
+# How long every followed subscription must have been matched before the watcher subscribes
+# to the instruction. A subscription counts a publisher as matched when its own reader has
+# matched the writer; the writer in the other process matches the reader a moment later, and
+# a volatile goal_pose sent in between is lost (CI lost episode 0's once, with the faster
+# grounder answering within 2 ms of the instruction).
+MATCH_SETTLE_S = 1.0
 LATCHED_TOPICS = {
     'entity_map',
     'instruction',
@@ -101,6 +107,7 @@ class DemoWatcher(Node):
             OccupancyGrid, 'relation_map', lambda m: setattr(self, 'relation', m), LATCHED
         )
         self.following = False  # subscribed to the instruction: see follow_instructions()
+        self.matched_since: float | None = None  # every followed topic matched since then
         self.create_subscription(
             PoseStamped, 'true_goal', lambda m: setattr(self, 'true_goal', m), LATCHED
         )
@@ -112,11 +119,18 @@ class DemoWatcher(Node):
         Subscribe to the instruction once every topic followed here and by `others` is matched.
 
         The gridworld starts the first episode when the instruction has its subscribers, this
-        one last, and a goal or a pose sent before its subscription is matched is lost.
+        one last, and a goal or a pose sent before its subscription is matched is lost: the
+        topics must have stayed matched for MATCH_SETTLE_S, so the writers have matched too.
         """
-        if not self.following and all(
+        if self.following:
+            return True
+        if not all(
             s.get_publisher_count() > 0 for s in [*self.subscriptions, *others.subscriptions]
         ):
+            self.matched_since = None
+            return False
+        self.matched_since = self.matched_since or time.monotonic()
+        if time.monotonic() - self.matched_since >= MATCH_SETTLE_S:
             self.create_subscription(
                 String, 'instruction', lambda m: setattr(self, 'instruction', m.data), LATCHED
             )
