@@ -888,7 +888,7 @@ class TRNet(nn.Module):
             near = scores[start:start + chunk].transpose(0, 1).addcmul(dist, -cost)
             if masked:
                 near = near.masked_fill(dist >= FAR_BEYOND, float('-inf'))
-            out = torch.maximum(out, near.amax(1) if len(ks) > 1 else near[:, 0])
+            out = torch.maximum(out, near.amax(1))  # over the chunk's kinds, per map
         return out
 
     def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
