@@ -11,8 +11,9 @@ Does a model send the robot to the cell a clear instruction names?
 
 Generated worlds at each size, every relation family of the generator (Janner et al.'s
 synthetic grammar) in equal numbers; per family and size, HIT (the share of maps whose
-predicted argmax is the named cell) and MD (Manhattan distance to it). Only the goal cell
-matters here, so no value iteration is run: the suite is cheap at 64x64.
+predicted argmax is the named cell) and MD (Manhattan distance to it). Each map is grounded
+alone through Grounder.ground, the node's own path, so the rates are the node's. Only the goal
+cell matters here, so no value iteration is run: the suite is cheap at 64x64.
 
     spatial-grounding suite --checkpoint pw_t-rnet-attn --sizes 10 32 64 --n 100 --json
 """
@@ -25,12 +26,11 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from . import world
 from .checkpoints import load_checkpoint
 from .entities import PUDDLEWORLD
+from .grounder import Grounder
 from .generator import COMPOSITIONAL_FAMILIES, FAMILIES, GLOBAL_FAMILIES, LOCAL_FAMILIES, sample
 from .options import ranged
-from .training import predict_maps
 
 GROUPS = {
     'local': LOCAL_FAMILIES,
@@ -73,6 +73,7 @@ def run_suite(
     if n < 1:
         raise ValueError(f'--n must be at least 1, got {n}')
     loaded = load_checkpoint(checkpoint, expect_entities=PUDDLEWORLD)
+    grounder = Grounder(loaded)
     distances = {f: {} for f in families}
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
@@ -81,10 +82,9 @@ def run_suite(
         grids = np.stack([w[0] for w in worlds])
         texts = [w[1] for w in worlds]
         goals = np.array([w[2] for w in worlds])
-        maps = predict_maps(
-            loaded.model, loaded.vocab, grids, texts, batch_size=max(1, 65536 // (size * size))
-        )
-        pred = world.argmax_cells(maps)
+        groundings = [grounder.ground(g, t) for g, t in zip(grids, texts)]
+        maps = np.stack([g.values for g in groundings])
+        pred = np.array([g.goal for g in groundings])
         d = np.abs(pred - goals).sum(1)
         distances[family][size] = d.tolist()
         for i in np.flatnonzero(d)[:failures_shown]:

@@ -138,7 +138,9 @@ def test_far_relation_and_head_text_learn_and_run_on_any_map(name):
 
 
 @pytest.mark.parametrize('log_cost', [-1.0, -7.0, -12.0])
-@pytest.mark.parametrize('shape', [(2, 5, 16), (1, 9, 12)], ids=['transforms', 'pairs'])
+@pytest.mark.parametrize(
+    'shape', [(2, 5, 16), (1, 5, 16), (1, 9, 12)], ids=['transforms', 'transforms one map', 'pairs']
+)
 def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost, shape):
     """
     Brute force: every cell i against every cell j within FAR_REACH rows and columns.
