@@ -74,7 +74,7 @@ PARAMETERS = (
         'max_cells',
         1024 * 1024,
         'larger entity maps are rejected (work and memory grow with the cells: a 1024x1024 '
-        'map grounds in about 1.1 s, peak RSS under 1 GB)',
+        'map grounds in about a second, peak RSS under 1 GB; docs/benchmarks.md)',
         low=1,
         high=4096 * 4096,
     ),
