@@ -1,0 +1,102 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Every shipped checkpoint's outputs on a fixed set of inputs, written once to a file.
+
+`python test/golden_values.py` writes test/data/golden_values.npz, `--check` prints the
+largest difference from it; test_golden.py loads every checkpoint anew and compares. A restructuring that changes no behaviour leaves them equal to
+the bit on the machine that wrote the file (max abs difference 0); the test holds a float
+tolerance, since another CPU may order sums otherwise.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+GOLDEN = Path(__file__).resolve().parent / 'data' / 'golden_values.npz'
+INSTRUCTIONS = [
+    'reach cell two below the westernmost rock',
+    'go to the closest star to the house',
+    'move to the cell between the heart and the tree',
+    'reach the cell three above the circle',
+]
+SIZES = (10, 16, 32)
+STATEMENTS = ['a red square is above a green circle', 'a blue shape is left of a triangle']
+
+
+def grid_checkpoints() -> list[str]:
+    from spatial_grounding_ros.checkpoints import PACKAGED_DIR
+
+    return sorted(p.stem for p in PACKAGED_DIR.glob('*.pt') if 'shapeworld' not in p.stem)
+
+
+def shapeworld_checkpoints() -> list[str]:
+    from spatial_grounding_ros.checkpoints import PACKAGED_DIR
+
+    return sorted(p.stem for p in PACKAGED_DIR.glob('shapeworld_*.pt'))
+
+
+def grid_inputs(n_entities: int, size: int) -> np.ndarray:
+    """4 maps of one size, every kind of a table drawn at random (the same for every model)."""
+    return np.random.default_rng([size, n_entities]).integers(0, n_entities, (4, size, size))
+
+
+def grid_outputs(name: str) -> dict[str, np.ndarray]:
+    """Value maps (full forward) and the Grounder's value maps and Z1, per size."""
+    from spatial_grounding_ros.grounder import Grounder
+    from spatial_grounding_ros.training import predict_maps
+
+    grounder = Grounder.from_checkpoint(name)
+    out = {}
+    for size in SIZES:
+        grids = grid_inputs(len(grounder.entities), size)
+        out[f'{name}/forward/{size}'] = predict_maps(
+            grounder.model, grounder.vocab, grids, INSTRUCTIONS
+        )
+        groundings = [grounder.ground(g, t) for g, t in zip(grids, INSTRUCTIONS)]
+        out[f'{name}/ground/{size}'] = np.stack([g.values for g in groundings])
+        out[f'{name}/z1/{size}'] = np.stack([g.relation_map for g in groundings])
+    return out
+
+
+def shapeworld_outputs(name: str) -> dict[str, np.ndarray]:
+    from spatial_grounding_ros.shapeworld_training import load, predict
+
+    model, vocab, _ = load(name)
+    images = np.random.default_rng(7).random((len(STATEMENTS), 64, 64, 3)).astype(np.float32)
+    return {f'{name}/logits': np.asarray(predict(model, vocab, images, STATEMENTS))}
+
+
+def all_outputs() -> dict[str, np.ndarray]:
+    torch.set_num_threads(1)
+    out = {}
+    for name in grid_checkpoints():
+        out.update(grid_outputs(name))
+    for name in shapeworld_checkpoints():
+        out.update(shapeworld_outputs(name))
+    return out
+
+
+def differences() -> dict[str, float]:
+    """Max abs difference per key between the file and the code as it is now."""
+    with np.load(GOLDEN) as golden:
+        now = all_outputs()
+        assert sorted(golden.files) == sorted(now), 'the checkpoints or inputs changed'
+        return {k: float(np.abs(golden[k] - now[k]).max()) for k in golden.files}
+
+
+if __name__ == '__main__':
+    import sys
+
+    if sys.argv[1:] == ['--check']:
+        worst = max(differences().values())
+        print(f'max abs difference over every output: {worst}')
+        sys.exit(worst != 0)
+    GOLDEN.parent.mkdir(exist_ok=True)
+    np.savez_compressed(GOLDEN, **all_outputs())
+    print(f'wrote {GOLDEN}')
