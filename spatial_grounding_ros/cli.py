@@ -18,15 +18,16 @@ import functools
 import json
 import sys
 
-from .allocator import keep_freed_memory
-from .datasets import DEFAULT_DATA, SPLITS
-from .tasks import TASKS
+from .core.allocator import keep_freed_memory
+from .core.tasks import TASKS
+from .data.datasets import DEFAULT_DATA, SPLITS
 
 
 def cmd_train(args) -> int:
-    from . import distributed, shapeworld_training
-    from .options import given_options
-    from .training import train_supervised, TrainConfig
+    from .shapeworld import training as shapeworld_training
+    from .training import distributed
+    from .training.options import given_options
+    from .training.supervised import train_supervised, TrainConfig
 
     given = given_options(TrainConfig, args)  # the rest: the config's and the task's defaults
     if args.task == shapeworld_training.TASK:
@@ -41,11 +42,11 @@ def cmd_train(args) -> int:
 
 
 def cmd_eval(args) -> int:
-    from . import shapeworld_training
-    from .checkpoints import load_checkpoint
-    from .datasets import load_task
-    from .noise import add_noise, NOISES, require_unseen_rows
-    from .training import evaluate
+    from .data.datasets import load_task
+    from .data.noise import add_noise, NOISES, require_unseen_rows
+    from .models.checkpoints import load_checkpoint
+    from .shapeworld import training as shapeworld_training
+    from .training.supervised import evaluate
 
     if args.task == shapeworld_training.TASK or args.image_noise:
         return shapeworld_training.cmd_eval(args)
@@ -79,7 +80,7 @@ def cmd_eval(args) -> int:
 
 
 def cmd_reproduce(args) -> int:
-    from .reproduce import reproduce_ablation, reproduce_suite, reproduce_value_maps
+    from .studies.reproduce import reproduce_ablation, reproduce_suite, reproduce_value_maps
 
     if args.ablation:
         reproduce_ablation(args.data, args.out, threads=args.threads)
@@ -94,9 +95,9 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_rl_train(args) -> int:
-    from .env import load_episodes
-    from .options import from_options
-    from .rl import RLConfig, train_rl
+    from .training.env import load_episodes
+    from .training.options import from_options
+    from .training.rl import RLConfig, train_rl
 
     cfg = from_options(RLConfig, args)
     train = test = None
@@ -119,7 +120,7 @@ def cmd_rl_train(args) -> int:
 
 
 def cmd_reproduce_rl(args) -> int:
-    from .reproduce import reproduce_rl
+    from .studies.reproduce import reproduce_rl
 
     reproduce_rl(
         args.data, args.out, args.tasks, args.models, args.episodes_scale, args.jobs,
@@ -136,12 +137,12 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import shapeworld_training
-    from .models import MODELS
-    from .noise import add_noise_options
-    from .options import add_options, ranged
-    from .shapeworld_models import MODELS as SHAPEWORLD_MODELS
-    from .training import TrainConfig
+    from .data.noise import add_noise_options
+    from .models.registry import MODELS
+    from .shapeworld import training as shapeworld_training
+    from .shapeworld.models import MODELS as SHAPEWORLD_MODELS
+    from .training.options import add_options, ranged
+    from .training.supervised import TrainConfig
 
     tasks = [*TASKS, shapeworld_training.TASK]
     models = [*MODELS, *(m for m in SHAPEWORLD_MODELS if m not in MODELS)]
@@ -207,11 +208,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def add_rl_commands(sub) -> None:
-    from .env import GENERATED
-    from .models import MODELS
-    from .options import add_options, ranged
-    from .rl import RLConfig
-    from .tasks import RL_TASKS
+    from .core.tasks import RL_TASKS
+    from .models.registry import MODELS
+    from .training.env import GENERATED
+    from .training.options import add_options, ranged
+    from .training.rl import RLConfig
 
     p = sub.add_parser('rl-train', help='train a model by RL (fitted value iteration)')
     p.add_argument('--task', required=True, choices=[*TASKS, *GENERATED])
@@ -259,7 +260,9 @@ def _extensions():
     bench, bags, the suite, robustness, explain, and the closed-loop demo, which needs rclpy
     (without it, every other subcommand still works).
     """
-    from . import bags, bench, explain, robustness, shapeworld_training, suite
+    from .data import bags
+    from .shapeworld import training as shapeworld_training
+    from .studies import bench, explain, robustness, suite
 
     found = [
         bench.register_cli,

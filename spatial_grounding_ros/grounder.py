@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .checkpoints import load_checkpoint, Loaded
-from .text import tokenize, UNK
+from .core.text import tokenize, UNK
+from .models.checkpoints import load_checkpoint, Loaded
 
 DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 

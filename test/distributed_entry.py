@@ -17,9 +17,10 @@ import json
 from pathlib import Path
 import sys
 
-from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.models import TCNN, TRNet
-from spatial_grounding_ros.training import train_supervised, TrainConfig
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.models.baselines import TCNN
+from spatial_grounding_ros.models.trnet import TRNet
+from spatial_grounding_ros.training.supervised import train_supervised, TrainConfig
 import torch
 
 # 3 epochs; t-RNetAttn's attention is off for the first: its weights get no gradient, then do.

@@ -8,9 +8,10 @@
 Every shipped checkpoint's outputs on a fixed set of inputs, written once to a file.
 
 `python test/golden_values.py` writes test/data/golden_values.npz, `--check` prints the
-largest difference from it; test_golden.py loads every checkpoint anew and compares. A restructuring that changes no behaviour leaves them equal to
-the bit on the machine that wrote the file (max abs difference 0); the test holds a float
-tolerance, since another CPU may order sums otherwise.
+largest difference from it; test_golden.py loads every checkpoint anew and compares. A
+restructuring that changes no behaviour leaves them equal to the bit on the machine that
+wrote the file (max abs difference 0); the test holds a float tolerance, since another CPU
+may order sums otherwise.
 """
 
 from pathlib import Path
@@ -30,13 +31,13 @@ STATEMENTS = ['a red square is above a green circle', 'a blue shape is left of a
 
 
 def grid_checkpoints() -> list[str]:
-    from spatial_grounding_ros.checkpoints import PACKAGED_DIR
+    from spatial_grounding_ros.models.checkpoints import PACKAGED_DIR
 
     return sorted(p.stem for p in PACKAGED_DIR.glob('*.pt') if 'shapeworld' not in p.stem)
 
 
 def shapeworld_checkpoints() -> list[str]:
-    from spatial_grounding_ros.checkpoints import PACKAGED_DIR
+    from spatial_grounding_ros.models.checkpoints import PACKAGED_DIR
 
     return sorted(p.stem for p in PACKAGED_DIR.glob('shapeworld_*.pt'))
 
@@ -49,7 +50,7 @@ def grid_inputs(n_entities: int, size: int) -> np.ndarray:
 def grid_outputs(name: str) -> dict[str, np.ndarray]:
     """Value maps (full forward) and the Grounder's value maps and Z1, per size."""
     from spatial_grounding_ros.grounder import Grounder
-    from spatial_grounding_ros.training import predict_maps
+    from spatial_grounding_ros.training.supervised import predict_maps
 
     grounder = Grounder.from_checkpoint(name)
     out = {}
@@ -65,7 +66,7 @@ def grid_outputs(name: str) -> dict[str, np.ndarray]:
 
 
 def shapeworld_outputs(name: str) -> dict[str, np.ndarray]:
-    from spatial_grounding_ros.shapeworld_training import load, predict
+    from spatial_grounding_ros.shapeworld.training import load, predict
 
     model, vocab, _ = load(name)
     images = np.random.default_rng(7).random((len(STATEMENTS), 64, 64, 3)).astype(np.float32)

@@ -21,11 +21,12 @@ import signal
 import subprocess
 
 import numpy as np
-from spatial_grounding_ros.checkpoints import save_checkpoint
-from spatial_grounding_ros.entities import PUDDLEWORLD
-from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.models import build_model, ModelConfig
-from spatial_grounding_ros.text import Vocabulary
+from spatial_grounding_ros.core.entities import PUDDLEWORLD
+from spatial_grounding_ros.core.text import Vocabulary
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.models.checkpoints import save_checkpoint
+from spatial_grounding_ros.models.config import ModelConfig
+from spatial_grounding_ros.models.registry import build_model
 import torch
 
 MODEL = 't-rnet-attn'

@@ -17,7 +17,7 @@ import pytest
 # returns to the system?
 SCRIPT = """
 import sys
-from spatial_grounding_ros.allocator import keep_freed_memory
+from spatial_grounding_ros.core.allocator import keep_freed_memory
 import torch
 if sys.argv[1] == 'keep':
     assert keep_freed_memory()

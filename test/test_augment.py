@@ -10,8 +10,10 @@ from collections import Counter
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import datasets, generator, world
-from spatial_grounding_ros.augment import (
+from spatial_grounding_ros.core import world
+from spatial_grounding_ros.core.text import PAD, tokenize, UNK, Vocabulary
+from spatial_grounding_ros.data import datasets, generator
+from spatial_grounding_ros.data.augment import (
     insert_noise_words,
     mirror,
     noise_word_pools,
@@ -20,8 +22,7 @@ from spatial_grounding_ros.augment import (
     swap_words,
     with_mirrors,
 )
-from spatial_grounding_ros.noise import kind_words, referenced_kinds
-from spatial_grounding_ros.text import PAD, tokenize, UNK, Vocabulary
+from spatial_grounding_ros.data.noise import kind_words, referenced_kinds
 import torch
 
 

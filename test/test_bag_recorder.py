@@ -34,7 +34,7 @@ from rclpy.duration import Duration  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
-from spatial_grounding_ros.bags import open_bag, typestore  # noqa: E402
+from spatial_grounding_ros.data.bags import open_bag, typestore  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.bag_recorder import BagRecorder  # noqa: E402
 from spatial_grounding_ros.ros.qos import LATCHED  # noqa: E402

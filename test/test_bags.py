@@ -16,8 +16,9 @@ import json
 import numpy as np
 import pytest
 import reference
-from spatial_grounding_ros import cli, world
-from spatial_grounding_ros.bags import BagWriter, evaluate_bag, typestore
+from spatial_grounding_ros import cli
+from spatial_grounding_ros.core import world
+from spatial_grounding_ros.data.bags import BagWriter, evaluate_bag, typestore
 
 STORE = typestore()
 T = STORE.types

@@ -14,13 +14,12 @@ dropped every landmark kind but one beyond 13x13 (issue 24).
 
 import numpy as np
 import pytest
-import torch
-
-from spatial_grounding_ros.checkpoints import PACKAGED_DIR
-from spatial_grounding_ros.generator import FAMILIES, sample
+from spatial_grounding_ros.data.generator import FAMILIES, sample
 from spatial_grounding_ros.grounder import Grounder
-from spatial_grounding_ros.models import unseen_kind_ids
-from spatial_grounding_ros.training import predict_maps
+from spatial_grounding_ros.models.checkpoints import PACKAGED_DIR
+from spatial_grounding_ros.models.encoders import unseen_kind_ids
+from spatial_grounding_ros.training.supervised import predict_maps
+import torch
 
 GRID_CHECKPOINTS = sorted(p.stem for p in PACKAGED_DIR.glob('*.pt') if 'shapeworld' not in p.stem)
 # batching changes only the order of float sums (BLAS blocks, LSTM batch): values agree to a
@@ -29,7 +28,7 @@ TOLERANCE = 1e-4
 
 
 def worlds(grounder: Grounder, size: int, n: int, seed: int):
-    """n maps of one size with many landmark kinds, and an instruction each."""
+    """Return n maps of one size with many landmark kinds, and an instruction each."""
     rng = np.random.default_rng([seed, size])
     if grounder.entities.domain == 'puddleworld':
         # every family once or more: several kinds on each map, extremes and 'closest' included

@@ -14,10 +14,10 @@ does (README, suite table).
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import suite
-from spatial_grounding_ros.entities import PUDDLEWORLD
-from spatial_grounding_ros.generator import FAMILY_OFFSETS, LOCAL_FAMILIES, local_phrase
+from spatial_grounding_ros.core.entities import PUDDLEWORLD
+from spatial_grounding_ros.data.generator import FAMILY_OFFSETS, LOCAL_FAMILIES, local_phrase
 from spatial_grounding_ros.grounder import Grounder
+from spatial_grounding_ros.studies import suite
 
 E = PUDDLEWORLD.index
 OFFSETS = [(o, f) for f, offsets in FAMILY_OFFSETS.items() for o in offsets if o != (0, 0)]

@@ -20,7 +20,8 @@ import torch
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from grounder_helpers import random_checkpoint  # noqa: E402, I100
-from spatial_grounding_ros import bench, cli  # noqa: E402
+from spatial_grounding_ros import cli  # noqa: E402
+from spatial_grounding_ros.studies import bench  # noqa: E402
 
 
 def test_bench_writes_every_section(tmp_path):

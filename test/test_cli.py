@@ -11,7 +11,7 @@ import subprocess
 import sys
 
 import pytest
-from spatial_grounding_ros.checkpoints import PACKAGED_DIR
+from spatial_grounding_ros.models.checkpoints import PACKAGED_DIR
 import torch
 
 
@@ -174,9 +174,9 @@ def test_train_options_are_the_config_fields():
     from dataclasses import fields
 
     from spatial_grounding_ros.cli import build_parser
-    from spatial_grounding_ros.options import given_options
-    from spatial_grounding_ros.tasks import TASKS
-    from spatial_grounding_ros.training import TrainConfig
+    from spatial_grounding_ros.core.tasks import TASKS
+    from spatial_grounding_ros.training.options import given_options
+    from spatial_grounding_ros.training.supervised import TrainConfig
 
     base = ['train', '--task', 'pw', '--model', 't-cnn']
     args = build_parser().parse_args(base)
@@ -213,8 +213,8 @@ def test_rl_options_are_the_config_fields():
     from dataclasses import fields
 
     from spatial_grounding_ros.cli import build_parser
-    from spatial_grounding_ros.options import from_options
-    from spatial_grounding_ros.rl import RLConfig
+    from spatial_grounding_ros.training.options import from_options
+    from spatial_grounding_ros.training.rl import RLConfig
 
     args = build_parser().parse_args(['rl-train', '--task', 'pw', '--model', 't-cnn'])
     assert from_options(RLConfig, args) == RLConfig()

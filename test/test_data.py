@@ -15,8 +15,9 @@ import json
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import datasets, world
-from spatial_grounding_ros.text import tokenize, UNK, Vocabulary
+from spatial_grounding_ros.core import world
+from spatial_grounding_ros.core.text import tokenize, UNK, Vocabulary
+from spatial_grounding_ros.data import datasets
 
 
 @pytest.mark.parametrize(

@@ -19,7 +19,7 @@ import sys
 
 import pytest
 from spatial_grounding_ros import cli
-from spatial_grounding_ros.checkpoints import load_checkpoint
+from spatial_grounding_ros.models.checkpoints import load_checkpoint
 import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -14,9 +14,9 @@ the example's maps, moves from world.step_cell, and the true values never reach 
 from gymnasium.utils.env_checker import check_env
 import numpy as np
 import pytest
-from spatial_grounding_ros import world
-from spatial_grounding_ros.env import GridWorldEnv, load_episodes
-from spatial_grounding_ros.generator import generate
+from spatial_grounding_ros.core import world
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.training.env import GridWorldEnv, load_episodes
 
 
 @pytest.fixture(scope='module')

@@ -15,19 +15,15 @@ gradients; the tiled output head must give the untiled one bit for bit.
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import generator
-from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
-from spatial_grounding_ros.entities import ISI
+from spatial_grounding_ros.core.entities import ISI
+from spatial_grounding_ros.core.text import Vocabulary
+from spatial_grounding_ros.data import generator
 from spatial_grounding_ros.grounder import Grounder
-from spatial_grounding_ros.models import (
-    build_model,
-    distractor_kind_ids,
-    gradient_maps,
-    kinds_per_map,
-    ModelConfig,
-    present_kinds,
-)
-from spatial_grounding_ros.text import Vocabulary
+from spatial_grounding_ros.models.checkpoints import load_checkpoint, PACKAGED_DIR
+from spatial_grounding_ros.models.config import ModelConfig
+from spatial_grounding_ros.models.encoders import distractor_kind_ids, kinds_per_map, present_kinds
+from spatial_grounding_ros.models.head import gradient_maps
+from spatial_grounding_ros.models.registry import build_model
 import torch
 
 TOLERANCE = {'rtol': 1e-5, 'atol': 1e-5}

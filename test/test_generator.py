@@ -16,8 +16,13 @@ import re
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import generator, world
-from spatial_grounding_ros.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from spatial_grounding_ros.core import world
+from spatial_grounding_ros.core.entities import (
+    PUDDLEWORLD,
+    PUDDLEWORLD_NONUNIQUE,
+    PUDDLEWORLD_UNIQUE,
+)
+from spatial_grounding_ros.data import generator
 
 OBJ = '|'.join(PUDDLEWORLD.names[2:])
 NUM = {'one': 1, 'two': 2, 'three': 3, 'four': 4}

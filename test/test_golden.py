@@ -6,8 +6,6 @@
 
 """Every shipped checkpoint still gives the outputs written before the package was reorganised."""
 
-import numpy as np
-
 from golden_values import differences
 
 # another CPU may order float sums otherwise; the machine that wrote the file gives 0

@@ -24,8 +24,8 @@ import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from spatial_grounding_ros import world
-from spatial_grounding_ros.generator import generate
+from spatial_grounding_ros.core import world
+from spatial_grounding_ros.data.generator import generate
 from spatial_grounding_ros.ros import convert
 from spatial_grounding_ros.ros.gridworld_node import GridWorldNode
 from spatial_grounding_ros.ros.qos import LATCHED, STREAM

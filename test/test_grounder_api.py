@@ -13,7 +13,7 @@ table is a ValueError, never a grounding of something else (int64 would truncate
 
 import numpy as np
 import pytest
-from spatial_grounding_ros.entities import PUDDLEWORLD
+from spatial_grounding_ros.core.entities import PUDDLEWORLD
 from spatial_grounding_ros.grounder import Grounder
 
 TEXT = 'reach cell two below star'

@@ -25,9 +25,12 @@ pytest.importorskip('rclpy', reason='rclpy is not installed')
 ament_packages = pytest.importorskip('ament_index_python.packages')
 
 from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402, I100
-from spatial_grounding_ros.checkpoints import load_checkpoint, resolve_checkpoint  # noqa: E402
-from spatial_grounding_ros.generator import generate  # noqa: E402
+from spatial_grounding_ros.data.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT, Grounder  # noqa: E402
+from spatial_grounding_ros.models.checkpoints import (  # noqa: E402
+    load_checkpoint,
+    resolve_checkpoint,
+)
 from spatial_grounding_ros.ros import convert  # noqa: E402
 
 PACKAGE = 'spatial_grounding_ros'

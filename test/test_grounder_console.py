@@ -23,12 +23,12 @@ import pytest
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402, I100
-from spatial_grounding_ros import world  # noqa: E402
-from spatial_grounding_ros.checkpoints import load_checkpoint  # noqa: E402
-from spatial_grounding_ros.datasets import load_task  # noqa: E402
+from spatial_grounding_ros.core import world  # noqa: E402
+from spatial_grounding_ros.data.datasets import load_task  # noqa: E402
 from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT  # noqa: E402
+from spatial_grounding_ros.models.checkpoints import load_checkpoint  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
-from spatial_grounding_ros.training import predict  # noqa: E402
+from spatial_grounding_ros.training.supervised import predict  # noqa: E402
 
 NAMESPACE = unique_namespace('console_test')
 

@@ -26,7 +26,7 @@ from lifecycle_msgs.msg import State, Transition  # noqa: E402
 from lifecycle_msgs.srv import ChangeState, GetState  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-from spatial_grounding_ros.generator import generate  # noqa: E402
+from spatial_grounding_ros.data.generator import generate  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 
 WORLDS = generate(2, seed=4, mode='local')

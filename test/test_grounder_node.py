@@ -24,7 +24,7 @@ pytest.importorskip('rclpy', reason='rclpy is not installed')
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-from spatial_grounding_ros.generator import generate  # noqa: E402
+from spatial_grounding_ros.data.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402

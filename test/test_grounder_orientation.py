@@ -21,8 +21,8 @@ pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from grounder_helpers import make_probe, north_east_checkpoint, unique_namespace  # noqa: E402,I100
 from rclpy.parameter import Parameter  # noqa: E402
-from spatial_grounding_ros import generator  # noqa: E402
-from spatial_grounding_ros.entities import PUDDLEWORLD_NONUNIQUE  # noqa: E402
+from spatial_grounding_ros.core.entities import PUDDLEWORLD_NONUNIQUE  # noqa: E402
+from spatial_grounding_ros.data import generator  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 

@@ -37,7 +37,7 @@ def imports(path: Path) -> set[str]:
             if node.level:
                 anchor = package.split('.')[: len(package.split('.')) - (node.level - 1)]
                 base = '.'.join(anchor + ([node.module] if node.module else []))
-            # `from . import world` imports the module spatial_grounding_ros.world
+            # `from ..core import world` imports the module spatial_grounding_ros.core.world
             found.update(
                 f'{base}.{alias.name}' if f'{base}.{alias.name}' in MODULES else base
                 for alias in node.names
@@ -55,8 +55,9 @@ def package_graph() -> dict[str, set[str]]:
 
 def test_the_parser_sees_the_known_imports():
     graph = package_graph()
-    assert f'{PACKAGE}.world' in graph[f'{PACKAGE}.env']
-    assert f'{PACKAGE}.datasets' in graph[f'{PACKAGE}.cli']
+    assert f'{PACKAGE}.core.world' in graph[f'{PACKAGE}.training.env']
+    assert f'{PACKAGE}.data.datasets' in graph[f'{PACKAGE}.cli']
+    assert f'{PACKAGE}.models.config' in graph[f'{PACKAGE}.models.trnet']
     assert f'{PACKAGE}.ros.convert' in graph[f'{PACKAGE}.ros.gridworld_node']
 
 

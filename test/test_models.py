@@ -8,26 +8,22 @@
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import generator
-from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
-from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
-from spatial_grounding_ros.models import (
-    AxialViews,
-    build_model,
-    FAR_BEYOND,
-    FAR_REACH,
+from spatial_grounding_ros.core.entities import ISI, PUDDLEWORLD
+from spatial_grounding_ros.core.text import Vocabulary
+from spatial_grounding_ros.data import generator
+from spatial_grounding_ros.models.checkpoints import load_checkpoint, save_checkpoint
+from spatial_grounding_ros.models.config import (
     head_code_size,
     ModelConfig,
-    MODELS,
-    present_kinds,
     relation_param_count,
     relative_positions,
-    shifted,
-    squared_distances,
-    tanh,
-    TRNet,
 )
-from spatial_grounding_ros.text import Vocabulary
+from spatial_grounding_ros.models.encoders import present_kinds, shifted
+from spatial_grounding_ros.models.far import FAR_BEYOND, FAR_REACH, squared_distances
+from spatial_grounding_ros.models.head import AxialViews
+from spatial_grounding_ros.models.registry import build_model, MODELS
+from spatial_grounding_ros.models.relation import tanh
+from spatial_grounding_ros.models.trnet import TRNet
 import torch
 
 
@@ -139,7 +135,9 @@ def test_far_relation_and_head_text_learn_and_run_on_any_map(name):
 
 @pytest.mark.parametrize('log_cost', [-1.0, -7.0, -12.0])
 @pytest.mark.parametrize(
-    'shape', [(2, 5, 16), (1, 5, 16), (1, 9, 12)], ids=['transforms', 'transforms one map', 'pairs']
+    'shape',
+    [(2, 5, 16), (1, 5, 16), (1, 9, 12)],
+    ids=['transforms', 'transforms one map', 'pairs'],
 )
 def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost, shape):
     """

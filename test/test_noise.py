@@ -8,11 +8,10 @@
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import generator
-from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
-from spatial_grounding_ros.entities import ISI, PUDDLEWORLD
-from spatial_grounding_ros.models import build_model, ModelConfig, unseen_kind_ids
-from spatial_grounding_ros.noise import (
+from spatial_grounding_ros.core.entities import ISI, PUDDLEWORLD
+from spatial_grounding_ros.core.text import tokenize, UNK, Vocabulary
+from spatial_grounding_ros.data import generator
+from spatial_grounding_ros.data.noise import (
     add_noise,
     ARTICLES,
     kind_words,
@@ -22,7 +21,10 @@ from spatial_grounding_ros.noise import (
     require_unseen_rows,
     VERBS,
 )
-from spatial_grounding_ros.text import tokenize, UNK, Vocabulary
+from spatial_grounding_ros.models.checkpoints import load_checkpoint, save_checkpoint
+from spatial_grounding_ros.models.config import ModelConfig
+from spatial_grounding_ros.models.encoders import unseen_kind_ids
+from spatial_grounding_ros.models.registry import build_model
 import torch
 
 UNSEEN = set(unseen_kind_ids(len(PUDDLEWORLD), MAX_K))

@@ -16,8 +16,9 @@ from pathlib import Path
 import re
 
 import pytest
-from spatial_grounding_ros import bench, cli
-from spatial_grounding_ros.checkpoints import load_checkpoint, PACKAGED_DIR
+from spatial_grounding_ros import cli
+from spatial_grounding_ros.models.checkpoints import load_checkpoint, PACKAGED_DIR
+from spatial_grounding_ros.studies import bench
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / 'results'
@@ -285,7 +286,7 @@ def test_shipped_shapeworld_checkpoint_evaluates_to_its_row(run, tmp_path_factor
 
 def test_robustness_table_is_the_json():
     """results/robustness.md is what robustness.markdown_table makes of robustness.json."""
-    from spatial_grounding_ros.robustness import robustness_markdown
+    from spatial_grounding_ros.studies.robustness import robustness_markdown
 
     study = json.loads((RESULTS / 'robustness.json').read_text())
     assert (RESULTS / 'robustness.md').read_text() == robustness_markdown(study)

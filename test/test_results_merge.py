@@ -15,7 +15,7 @@ import json
 import multiprocessing
 from pathlib import Path
 
-from spatial_grounding_ros.results import merge_rows
+from spatial_grounding_ros.studies.results import merge_rows
 
 RESULTS = Path(__file__).resolve().parents[1] / 'results'
 
@@ -70,7 +70,7 @@ def test_merge_replaces_own_rows_keeps_others_in_task_order(tmp_path):
 
 def test_table_writers_give_the_committed_tables():
     # imported here: the merging processes above import this module, and need no torch
-    from spatial_grounding_ros.reproduce import markdown_table, rl_table
+    from spatial_grounding_ros.studies.reproduce import markdown_table, rl_table
 
     value_map = json.loads((RESULTS / 'value_map.json').read_text())['runs']
     assert markdown_table(value_map) == (RESULTS / 'value_map.md').read_text()

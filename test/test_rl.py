@@ -17,13 +17,19 @@ import json
 import numpy as np
 import pytest
 from spatial_grounding_ros import cli
-from spatial_grounding_ros.augment import mirror
-from spatial_grounding_ros.checkpoints import load_checkpoint
-from spatial_grounding_ros.env import GridWorldEnv, load_episodes
-from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.reproduce import reproduce_rl
-from spatial_grounding_ros.rl import act, fitted_value_step, ReplayBuffer, RLConfig, train_rl
-from spatial_grounding_ros.text import tokenize, Vocabulary
+from spatial_grounding_ros.core.text import tokenize, Vocabulary
+from spatial_grounding_ros.data.augment import mirror
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.models.checkpoints import load_checkpoint
+from spatial_grounding_ros.studies.reproduce import reproduce_rl
+from spatial_grounding_ros.training.env import GridWorldEnv, load_episodes
+from spatial_grounding_ros.training.rl import (
+    act,
+    fitted_value_step,
+    ReplayBuffer,
+    RLConfig,
+    train_rl,
+)
 import torch
 
 
@@ -237,7 +243,7 @@ def test_ros_client_has_the_environment_spaces():
     (Gymnasium's check_env cannot run on it: its episodes are seeded by the node's parameter,
     so reset(seed=) is refused.)
     """
-    from spatial_grounding_ros.datasets import DEFAULT_DATA
+    from spatial_grounding_ros.data.datasets import DEFAULT_DATA
     from spatial_grounding_ros.ros.gridworld_client import ros_envs
 
     train = load_episodes('generator-local', n=20, seed=0)

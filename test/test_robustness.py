@@ -17,15 +17,17 @@ import pickle
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import cli, generator
-from spatial_grounding_ros.checkpoints import load_checkpoint, save_checkpoint
-from spatial_grounding_ros.datasets import PW_TEST_WORLDS
-from spatial_grounding_ros.entities import PUDDLEWORLD
-from spatial_grounding_ros.explain import pair_scores
-from spatial_grounding_ros.models import build_model, ModelConfig
-from spatial_grounding_ros.noise import NOISES
-from spatial_grounding_ros.robustness import markdown_table, minimum_verdict
-from spatial_grounding_ros.text import Vocabulary
+from spatial_grounding_ros import cli
+from spatial_grounding_ros.core.entities import PUDDLEWORLD
+from spatial_grounding_ros.core.text import Vocabulary
+from spatial_grounding_ros.data import generator
+from spatial_grounding_ros.data.datasets import PW_TEST_WORLDS
+from spatial_grounding_ros.data.noise import NOISES
+from spatial_grounding_ros.models.checkpoints import load_checkpoint, save_checkpoint
+from spatial_grounding_ros.models.config import ModelConfig
+from spatial_grounding_ros.models.registry import build_model
+from spatial_grounding_ros.studies.explain import pair_scores
+from spatial_grounding_ros.studies.robustness import markdown_table, minimum_verdict
 import torch
 
 N_WORLDS = 8

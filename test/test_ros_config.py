@@ -18,7 +18,7 @@ from pathlib import Path
 import re
 
 import pytest
-from spatial_grounding_ros.entities import EntityTable, ISI, PUDDLEWORLD
+from spatial_grounding_ros.core.entities import EntityTable, ISI, PUDDLEWORLD
 from spatial_grounding_ros.ros.package_files import find_config
 import yaml
 

@@ -17,17 +17,11 @@ import re
 import numpy as np
 import pytest
 from spatial_grounding_ros import cli
-from spatial_grounding_ros import shapeworld as sw
-from spatial_grounding_ros.checkpoints import load_checkpoint
-from spatial_grounding_ros.shapeworld_models import build_model, pair_offsets, ShapeWorldConfig
-from spatial_grounding_ros.shapeworld_training import (
-    as_input,
-    encode,
-    load,
-    train,
-    TrainConfig,
-)
-from spatial_grounding_ros.text import Vocabulary
+from spatial_grounding_ros.core.text import Vocabulary
+from spatial_grounding_ros.models.checkpoints import load_checkpoint
+from spatial_grounding_ros.shapeworld import data as sw
+from spatial_grounding_ros.shapeworld.models import build_model, pair_offsets, ShapeWorldConfig
+from spatial_grounding_ros.shapeworld.training import as_input, encode, load, train, TrainConfig
 import torch
 import torch.nn.functional as F
 

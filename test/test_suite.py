@@ -17,9 +17,9 @@ import sys
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import suite
-from spatial_grounding_ros.generator import FAMILIES, family_goals
+from spatial_grounding_ros.data.generator import FAMILIES, family_goals
 from spatial_grounding_ros.grounder import Grounder
+from spatial_grounding_ros.studies import suite
 
 
 def run(*args):

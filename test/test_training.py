@@ -15,12 +15,14 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from spatial_grounding_ros import datasets
-from spatial_grounding_ros.augment import add_distractors
-from spatial_grounding_ros.checkpoints import load_checkpoint
-from spatial_grounding_ros.generator import generate
-from spatial_grounding_ros.models import build_model, distractor_kind_ids, ModelConfig
-from spatial_grounding_ros.training import train_supervised, TrainConfig
+from spatial_grounding_ros.data import datasets
+from spatial_grounding_ros.data.augment import add_distractors
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.models.checkpoints import load_checkpoint
+from spatial_grounding_ros.models.config import ModelConfig
+from spatial_grounding_ros.models.encoders import distractor_kind_ids
+from spatial_grounding_ros.models.registry import build_model
+from spatial_grounding_ros.training.supervised import train_supervised, TrainConfig
 import torch
 
 EPOCHS = 6

@@ -12,7 +12,7 @@ import pickle
 import numpy as np
 import pytest
 import reference
-from spatial_grounding_ros import world
+from spatial_grounding_ros.core import world
 
 
 def test_value_iteration_reproduces_every_puddleworld_pickle(data_dir):

@@ -29,7 +29,7 @@ from rclpy.node import Node
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from .qos import LATCHED, STREAM
-from ..bags import BagWriter, duration
+from ..data.bags import BagWriter, duration
 
 
 def message_class(msgtype: str):

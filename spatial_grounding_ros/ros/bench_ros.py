@@ -29,7 +29,7 @@ from std_msgs.msg import Header, String
 from . import convert
 from .processes import executable, stop_processes
 from .qos import LATCHED
-from ..measure import percentiles, rss_mb
+from ..studies.measure import percentiles, rss_mb
 
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
 # run, that share a ROS_DOMAIN_ID never answer each other's requests

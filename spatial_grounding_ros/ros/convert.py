@@ -23,8 +23,8 @@ import numpy as np
 from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 
 # the ROS side reads the geometry through this module: convert.cell_centre, convert.point_to_cell
-from ..map_geometry import cell_centre, multiarray_to_map, origin_quaternion
-from ..map_geometry import point_to_cell  # noqa: F401
+from ..core.map_geometry import cell_centre, multiarray_to_map, origin_quaternion
+from ..core.map_geometry import point_to_cell  # noqa: F401
 
 PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
 # value_map cells: best = 100 (display) or best = 0 (cost, as a costmap reads it)

@@ -39,11 +39,11 @@ from . import convert
 from .bag_recorder import RecordingThread
 from .processes import executable, stop_processes
 from .qos import LATCHED, STREAM
-from ..bags import evaluate_bag
-from ..datasets import DEFAULT_DATA
-from ..entities import PUDDLEWORLD
-from ..options import ranged
-from ..plots import plot_grounding
+from ..core.entities import PUDDLEWORLD
+from ..data.bags import evaluate_bag
+from ..data.datasets import DEFAULT_DATA
+from ..studies.plots import plot_grounding
+from ..training.options import ranged
 
 RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
     'entity_map': 'nav_msgs/msg/OccupancyGrid',

@@ -35,8 +35,8 @@ from std_srvs.srv import Trigger
 from . import convert
 from .processes import stop_processes
 from .qos import LATCHED, STREAM
-from ..env import observation_space
-from ..world import ACTIONS
+from ..core.world import ACTIONS
+from ..training.env import observation_space
 
 
 class GridWorldClient(Node):

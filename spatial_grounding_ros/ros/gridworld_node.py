@@ -35,10 +35,10 @@ from std_srvs.srv import Trigger
 from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .qos import LATCHED, STREAM
-from .. import world
-from ..datasets import DEFAULT_DATA, SPLITS
-from ..env import GENERATED, GridWorldEnv, load_episodes
-from ..tasks import TASKS
+from ..core import world
+from ..core.tasks import TASKS
+from ..data.datasets import DEFAULT_DATA, SPLITS
+from ..training.env import GENERATED, GridWorldEnv, load_episodes
 
 NODE_NAME = 'gridworld'
 

@@ -47,9 +47,9 @@ from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .package_files import find_config
 from .qos import LATCHED
-from ..checkpoints import load_checkpoint, resolve_checkpoint
-from ..entities import EntityTable
+from ..core.entities import EntityTable
 from ..grounder import DEFAULT_CHECKPOINT, Grounder
+from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
 

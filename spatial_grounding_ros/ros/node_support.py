@@ -38,7 +38,7 @@ from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from std_msgs.msg import Header
 
-from ..allocator import keep_freed_memory
+from ..core.allocator import keep_freed_memory
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')

@@ -43,16 +43,17 @@ import time
 import numpy as np
 import torch
 
-from . import world
-from .augment import mirror_cell, MIRROR_IMAGES, mirror_instruction
-from .checkpoints import save_checkpoint
-from .datasets import GroundingSet
 from .env import GridWorldEnv, load_episodes
-from .models import build_model, ModelConfig
 from .options import check, option
-from .tasks import TASKS
-from .text import Vocabulary
-from .training import predict
+from .supervised import predict
+from ..core import world
+from ..core.tasks import TASKS
+from ..core.text import Vocabulary
+from ..data.augment import mirror_cell, MIRROR_IMAGES, mirror_instruction
+from ..data.datasets import GroundingSet
+from ..models.checkpoints import save_checkpoint
+from ..models.config import ModelConfig
+from ..models.registry import build_model
 
 
 @dataclass

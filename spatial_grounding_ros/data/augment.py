@@ -24,9 +24,9 @@ import numpy as np
 import torch
 
 from .datasets import GroundingSet
-from .models import distractor_kind_ids
 from .noise import free_cells, noise_words
-from .text import PAD, tokenize, UNK, Vocabulary
+from ..core.text import PAD, tokenize, UNK, Vocabulary
+from ..models.encoders import distractor_kind_ids
 
 
 def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:

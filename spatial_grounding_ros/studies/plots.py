@@ -22,7 +22,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .entities import EntityTable  # noqa: E402
+from ..core.entities import EntityTable  # noqa: E402
 
 
 def plot_grounding(

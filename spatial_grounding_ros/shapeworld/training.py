@@ -27,10 +27,10 @@ import torch
 import torch.nn.functional as F
 from tqdm import tqdm
 
-from .checkpoints import FORMAT, read_checkpoint, resolve_checkpoint
-from .shapeworld import converse, image_noise, load_split, ShapeWorldSet, text_noise
-from .shapeworld_models import build_model, MODELS, ShapeWorldConfig
-from .text import Vocabulary
+from .data import converse, image_noise, load_split, ShapeWorldSet, text_noise
+from .models import build_model, MODELS, ShapeWorldConfig
+from ..core.text import Vocabulary
+from ..models.checkpoints import FORMAT, read_checkpoint, resolve_checkpoint
 
 TASK = 'shapeworld'
 # epochs over the training split after the curriculum's warm-up (TrainConfig), per model
@@ -380,7 +380,7 @@ def reproduce(
     `eval_only` skips training and evaluates the shipped checkpoints (the tables of a given
     set of checkpoints, e.g. after the noise study changed).
     """
-    from .checkpoints import PACKAGED_DIR
+    from ..models.checkpoints import PACKAGED_DIR
 
     out = Path(out)
     test = load_split('test', cache_dir)

@@ -32,11 +32,12 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from .generator import generate, global_goals, local_goals, random_grid
-from .grounder import DEFAULT_CHECKPOINT, Grounder
 from .measure import peak_rss_mb, percentiles, reset_peak_rss, rss_mb
-from .models import build_model, ModelConfig
-from .options import ranged
+from ..data.generator import generate, global_goals, local_goals, random_grid
+from ..grounder import DEFAULT_CHECKPOINT, Grounder
+from ..models.config import ModelConfig
+from ..models.registry import build_model
+from ..training.options import ranged
 
 SIZES = (10, 32, 64, 128, 256, 512, 1024)
 # issue 11's minimum: Grounder.ground (cached instruction) against the output network alone
@@ -247,7 +248,7 @@ def run(args) -> dict:
     result['throughput'] = batch_throughput(grounder, args.batch, args.batch_reps)
     result['training_step'] = training_step(grounder, args.train_batch, args.budget)
     if not args.skip_ros:
-        from .ros.bench_ros import round_trip_latency
+        from ..ros.bench_ros import round_trip_latency
 
         grid, _ = world_of_size(10, seed=3)
         texts = [text for text, _ in global_goals(grid) + local_goals(grid)]

@@ -29,9 +29,9 @@ import gymnasium
 from gymnasium import spaces
 import numpy as np
 
-from . import world
-from .datasets import DEFAULT_DATA, GroundingSet, load_task
-from .generator import generate
+from ..core import world
+from ..data.datasets import DEFAULT_DATA, GroundingSet, load_task
+from ..data.generator import generate
 
 DEFAULT_STEP_LIMIT = 50
 # Episode sources made by the generator (no data set needed); the rest are tasks.TASKS.

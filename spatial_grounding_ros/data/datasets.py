@@ -25,9 +25,9 @@ import pickle
 
 import numpy as np
 
-from . import world
-from .entities import EntityTable, ISI, PUDDLEWORLD
-from .tasks import task as find_task
+from ..core import world
+from ..core.entities import EntityTable, ISI, PUDDLEWORLD
+from ..core.tasks import task as find_task
 
 # Where the data sets are read from unless a command, node parameter or call says otherwise:
 # the one place this path is written (the Makefile and config/gridworld.yaml take it from here).

@@ -25,21 +25,23 @@ import torch
 import torch.nn.functional as F
 from tqdm import tqdm
 
-from . import distributed, tasks, world
-from .augment import add_distractors, insert_noise_words, noise_word_pools, with_mirrors
-from .checkpoints import save_checkpoint
-from .datasets import (
+from . import distributed
+from .options import check, option
+from ..core import tasks, world
+from ..core.text import Vocabulary
+from ..data.augment import add_distractors, insert_noise_words, noise_word_pools, with_mirrors
+from ..data.datasets import (
     GroundingSet,
     load_task,
     load_world_instructions,
     pw_world_ids,
     split_by_world,
 )
-from .generator import generate, MODES
-from .models import build_model, ModelConfig
-from .noise import MAX_K
-from .options import check, option
-from .text import Vocabulary
+from ..data.generator import generate, MODES
+from ..data.noise import MAX_K
+from ..models.checkpoints import save_checkpoint
+from ..models.config import ModelConfig
+from ..models.registry import build_model
 
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.

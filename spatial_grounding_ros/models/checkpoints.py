@@ -20,12 +20,14 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from .entities import EntityTable
-from .models import build_model, EntityEncoder, ModelConfig, MODELS
-from .text import Vocabulary
+from .config import ModelConfig
+from .encoders import EntityEncoder
+from .registry import build_model, MODELS
+from ..core.entities import EntityTable
+from ..core.text import Vocabulary
 
 FORMAT = 'spatial_grounding_ros/1'
-PACKAGED_DIR = Path(__file__).resolve().parent / 'checkpoints'
+PACKAGED_DIR = Path(__file__).resolve().parents[1] / 'checkpoints'  # the package's own
 
 
 @dataclass

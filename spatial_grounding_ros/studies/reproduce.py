@@ -24,12 +24,12 @@ import time
 import numpy as np
 import torch
 
-from .checkpoints import load_checkpoint, PACKAGED_DIR
-from .datasets import load_task
 from .results import merge_rows
-from .rl import RLConfig, train_rl
-from .tasks import RL_TASKS, TASKS
-from .training import evaluate, train_supervised, TrainConfig
+from ..core.tasks import RL_TASKS, TASKS
+from ..data.datasets import load_task
+from ..models.checkpoints import load_checkpoint, PACKAGED_DIR
+from ..training.rl import RLConfig, train_rl
+from ..training.supervised import evaluate, train_supervised, TrainConfig
 
 SHIPPED = ('t-rnet-attn', 't-rnet', 't-cnn')
 # The suite table's columns: the node's default first, then the per-task checkpoints.

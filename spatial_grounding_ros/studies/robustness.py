@@ -24,11 +24,11 @@ import sys
 
 from tqdm import tqdm
 
-from .checkpoints import load_checkpoint, PACKAGED_DIR, resolve_checkpoint
-from .datasets import DEFAULT_DATA, load_task
-from .noise import add_noise, MAX_K, noise_count, NOISES, require_unseen_rows
 from .plots import plot_robustness
-from .training import evaluate
+from ..data.datasets import DEFAULT_DATA, load_task
+from ..data.noise import add_noise, MAX_K, noise_count, NOISES, require_unseen_rows
+from ..models.checkpoints import load_checkpoint, PACKAGED_DIR, resolve_checkpoint
+from ..training.supervised import evaluate
 
 STUDY_TASKS = ('pw-local', 'pw-global', 'isi')
 DEFAULT_KS = (0, 1, 2, 5, 10)

@@ -50,8 +50,9 @@ import math
 import torch
 from torch import nn
 
-from .models import TextEncoder, TRNet
-from .shapeworld import IMAGE
+from .data import IMAGE
+from ..models.encoders import TextEncoder
+from ..models.trnet import TRNet
 
 
 @dataclass

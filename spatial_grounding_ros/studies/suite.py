@@ -26,11 +26,17 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from .checkpoints import load_checkpoint
-from .entities import PUDDLEWORLD
-from .grounder import Grounder
-from .generator import COMPOSITIONAL_FAMILIES, FAMILIES, GLOBAL_FAMILIES, LOCAL_FAMILIES, sample
-from .options import ranged
+from ..core.entities import PUDDLEWORLD
+from ..data.generator import (
+    COMPOSITIONAL_FAMILIES,
+    FAMILIES,
+    GLOBAL_FAMILIES,
+    LOCAL_FAMILIES,
+    sample,
+)
+from ..grounder import Grounder
+from ..models.checkpoints import load_checkpoint
+from ..training.options import ranged
 
 GROUPS = {
     'local': LOCAL_FAMILIES,

@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import world
 from .datasets import GroundingSet
-from .entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from ..core import world
+from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
 GRASS, PUDDLE = 0, 1
 _NUMBER = {1: 'one', 2: 'two', 3: 'three', 4: 'four'}

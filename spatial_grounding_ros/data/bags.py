@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import world
-from .map_geometry import multiarray_to_map, point_to_cell
+from ..core import world
+from ..core.map_geometry import multiarray_to_map, point_to_cell
 
 STORE = 'ROS2_JAZZY'
 ROS_DISTRO = 'jazzy'

@@ -21,7 +21,7 @@ import os
 from pathlib import Path
 from typing import Callable
 
-from .tasks import TASKS
+from ..core.tasks import TASKS
 
 
 @contextlib.contextmanager

@@ -32,9 +32,10 @@ from dataclasses import replace
 import numpy as np
 
 from .datasets import GroundingSet
-from .entities import EntityTable
-from .models import EntityEncoder, ModelConfig, unseen_kind_ids
-from .text import tokenize, Vocabulary
+from ..core.entities import EntityTable
+from ..core.text import tokenize, Vocabulary
+from ..models.config import ModelConfig
+from ..models.encoders import EntityEncoder, unseen_kind_ids
 
 NOISES = ('obs-noise', 'text-noise', 'unknown-words')
 MAX_K = ModelConfig.unseen_kinds  # the paper's 1..10; also the unseen kinds a model holds

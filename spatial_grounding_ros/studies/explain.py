@@ -23,14 +23,16 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from . import world
-from .checkpoints import load_checkpoint, Loaded
-from .datasets import DEFAULT_DATA, load_task, SPLITS
-from .models import neighbour_offsets, shifted, TRNet
-from .noise import add_noise, add_noise_options, NOISES, require_unseen_rows
 from .plots import plot_explanation
-from .tasks import TASKS
-from .text import tokenize
+from ..core import world
+from ..core.tasks import TASKS
+from ..core.text import tokenize
+from ..data.datasets import DEFAULT_DATA, load_task, SPLITS
+from ..data.noise import add_noise, add_noise_options, NOISES, require_unseen_rows
+from ..models.checkpoints import load_checkpoint, Loaded
+from ..models.config import neighbour_offsets
+from ..models.encoders import shifted
+from ..models.trnet import TRNet
 
 PAIRS_SHOWN = 3
 

@@ -1,0 +1,72 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""The far relation's geometry: squared distances to the nearest marked cell, and pairs'."""
+
+from __future__ import annotations
+
+import functools
+
+import torch
+import torch.nn.functional as F
+
+
+# The far relation: its position code (the 8 offsets' codes are -1, -5/7, ..., 1), the log of
+# its first cost per squared cell of distance, and its reach in rows and columns (a 10x10 map
+# whole, a robot map's neighbourhood)
+FAR_POSITION, FAR_LOG_COST, FAR_REACH = 0.0, -3.0, 12
+
+
+# a squared distance past any reach: "no such cell within reach" (int16 leaves room for the
+# two passes' additions)
+FAR_BEYOND = 1 << 14
+# cells per chunk of kinds in far_map: one large map's planes at a time stay in cache, while the
+# small maps of a training batch take all kinds in one go
+FAR_CHUNK_CELLS = 1 << 18
+# far_map scores every cell pair of maps within reach while they have at most this many pairs
+# (one 10x10 map: 10^4); a training batch takes the distance transforms, which are cheaper there
+FAR_PAIRS = 1 << 16
+# squared_distances takes a pass as one op over all 2R+1 shifts while they hold at most this
+# many entries (per-op costs dominate such small planes), and shifts in place above it
+FAR_UNFOLD_ENTRIES = 1 << 19
+
+
+def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
+    """
+    Return each cell's squared distance to the nearest marked cell, per map of marks (..., H, W).
+
+    Only marks within `reach` rows and columns count; FAR_BEYOND or more where none does. The
+    squared distance splits into rows and columns, so it is two exact passes of 2R+1 shifts,
+    O(HWR). It depends on the grid alone (no gradient), so it runs in int16: a 512x512 plane
+    is 512 KB. Small planes take each pass as one op over all shifts (FAR_UNFOLD_ENTRIES);
+    large ones shift in place, which stays in cache.
+    """
+    d = torch.full(marks.shape, FAR_BEYOND, dtype=torch.int16, device=marks.device)
+    d.masked_fill_(marks, 0)
+    for dim in (-1, -2):
+        n = d.shape[dim]
+        r = min(reach, n - 1)
+        padded = F.pad(d, [r, r] if dim == -1 else [0, 0, r, r], value=FAR_BEYOND)
+        if d.numel() * (2 * r + 1) <= FAR_UNFOLD_ENTRIES:
+            squares = (torch.arange(-r, r + 1, device=d.device) ** 2).to(d.dtype)
+            d = (padded.unfold(dim, 2 * r + 1, 1) + squares).amin(-1)
+            continue
+        step = torch.empty_like(d)
+        for s in range(1, r + 1):
+            for start in (r - s, r + s):
+                torch.add(padded.narrow(dim, start, n), s * s, out=step)
+                torch.minimum(d, step, out=d)
+    return d
+
+
+@functools.lru_cache(maxsize=16)
+def pair_distances(height: int, width: int, device=None) -> torch.Tensor:
+    """(H*W, H*W): the squared distance between every two cells of a map (read only)."""
+    rows, cols = torch.meshgrid(
+        torch.arange(height, device=device), torch.arange(width, device=device), indexing='ij'
+    )
+    cells = torch.stack([rows.flatten(), cols.flatten()], 1).float()
+    return ((cells[:, None] - cells[None]) ** 2).sum(-1)
