@@ -39,6 +39,7 @@ from rclpy.publisher import Publisher
 from std_msgs.msg import Header
 
 from ..core.allocator import keep_freed_memory
+from ..training.options import range_problem, range_words
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
@@ -51,7 +52,8 @@ class Param:
     One parameter of a node.
 
     Its default (whose Python type is the parameter's type), what it means, and what values it
-    takes.
+    takes. A range or choice is worded and checked by training/options.py, as the command-line
+    options are, so a node and the CLI state the same rule the same way.
     """
 
     name: str
@@ -73,12 +75,7 @@ class Param:
             return 'one of ' + ', '.join(self.choices)
         if self.non_empty:
             return 'not empty'
-        show = str if self.type is int else (lambda x: f'{x:g}')
-        if self.low is not None and self.high is not None:
-            return f'{show(self.low)}..{show(self.high)}'
-        if self.low is not None:
-            return f'at least {show(self.low)}'
-        return ''
+        return range_words(self.low, self.high)
 
     def descriptor(self) -> ParameterDescriptor:
         descriptor = ParameterDescriptor(
@@ -115,17 +112,15 @@ class Param:
                 f'must be {TYPE_NAMES[self.type]}{hint}, got '
                 f'{TYPE_NAMES.get(type(value), type(value).__name__)} {value!r}'
             )
-        if self.choices and value not in self.choices:
-            return f'must be one of {", ".join(self.choices)}, got {value!r}'
+        reason = self.choices and range_problem(value, choices=self.choices)
+        if reason:
+            return reason
         if self.non_empty and not value.strip():
             return 'must not be empty'
+        if self.type is float and not math.isfinite(value):
+            return f'must be a finite number, got {value!r}'
         if self.type in (int, float):
-            if self.type is float and not math.isfinite(value):
-                return f'must be a finite number, got {value!r}'
-            if (self.low is not None and value < self.low) or (
-                self.high is not None and value > self.high
-            ):
-                return f'must be {self.constraints()}, got {value!r}'
+            return range_problem(value, self.low, self.high)
         return None
 
 

@@ -13,7 +13,9 @@ for a bool) with that default, help and range, and `from_options` builds the dat
 the parsed arguments (`given_options`: only those given, when the rest has other defaults, such
 as a task's). `ranged` range-checks an option that is no field. A dataclass that calls
 `check(self)` in `__post_init__` refuses the same bad values from Python, so a default or a range
-cannot differ between the API and the CLI.
+cannot differ between the API and the CLI. `range_words` and `range_problem` are the one
+statement of an inclusive range and its error text: the ROS nodes' parameters
+(ros/node_support.py) check theirs with them too.
 
     @dataclass
     class Config:
@@ -45,11 +47,10 @@ def option(
     )
 
 
-def constraint(f) -> str:
-    """Return the field's range as words ('' when it has none)."""
+def range_words(low: float | None, high: float | None) -> str:
+    """Return an inclusive range as words: '1..5', 'at least 1', 'at most 5' or ''."""
     low, high = (
-        None if x is None else str(x) if isinstance(x, int) else f'{x:g}'
-        for x in (f.metadata.get('low'), f.metadata.get('high'))
+        None if x is None else str(x) if isinstance(x, int) else f'{x:g}' for x in (low, high)
     )
     if low is not None and high is not None:
         return f'{low}..{high}'
@@ -60,17 +61,29 @@ def constraint(f) -> str:
     return ''
 
 
+def range_problem(
+    value, low: float | None = None, high: float | None = None, choices: tuple | None = None
+) -> str | None:
+    """Return what is wrong with `value` for these choices or this inclusive range, or None."""
+    if choices and value not in choices:
+        return f'must be one of {", ".join(map(str, choices))}, got {value!r}'
+    if (low is not None and value < low) or (high is not None and value > high):
+        return f'must be {range_words(low, high)}, got {value!r}'
+    return None
+
+
+def constraint(f) -> str:
+    """Return the field's range as words ('' when it has none)."""
+    return range_words(f.metadata.get('low'), f.metadata.get('high'))
+
+
 def problem(f, value) -> str | None:
     """Return what is wrong with `value` for field `f`, or None (None itself is always fine)."""
     if value is None or isinstance(value, bool):
         return None
-    choices = f.metadata.get('choices')
-    if choices is not None and value not in choices:
-        return f'must be one of {", ".join(map(str, choices))}, got {value!r}'
-    low, high = f.metadata.get('low'), f.metadata.get('high')
-    if (low is not None and value < low) or (high is not None and value > high):
-        return f'must be {constraint(f)}, got {value!r}'
-    return None
+    return range_problem(
+        value, f.metadata.get('low'), f.metadata.get('high'), f.metadata.get('choices')
+    )
 
 
 def check(config) -> None:
