@@ -32,30 +32,22 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import world
+from ..core import topics, world
 from ..core.map_geometry import multiarray_to_map, point_to_cell
 
 STORE = 'ROS2_JAZZY'
 ROS_DISTRO = 'jazzy'
 BAG_VERSION = 9
 TOPICS = {  # role -> default topic name (relative names match any namespace)
-    'instruction': 'instruction',
-    'goal': 'goal_pose',
-    'truth': 'true_goal',
-    'map': 'entity_map',
-    'values': 'value_map_raw',
-    'true_values': 'true_value_map',
-    'true_rewards': 'true_reward_map',
+    'instruction': topics.INSTRUCTION,
+    'goal': topics.GOAL_POSE,
+    'truth': topics.TRUE_GOAL,
+    'map': topics.ENTITY_MAP,
+    'values': topics.VALUE_MAP_RAW,
+    'true_values': topics.TRUE_VALUE_MAP,
+    'true_rewards': topics.TRUE_REWARD_MAP,
 }
-MSGTYPES = {
-    'instruction': 'std_msgs/msg/String',
-    'goal': 'geometry_msgs/msg/PoseStamped',
-    'truth': 'geometry_msgs/msg/PoseStamped',
-    'map': 'nav_msgs/msg/OccupancyGrid',
-    'values': 'std_msgs/msg/Float32MultiArray',
-    'true_values': 'std_msgs/msg/Float32MultiArray',
-    'true_rewards': 'std_msgs/msg/Float32MultiArray',
-}
+MSGTYPES = {role: topics.MSGTYPES[topic] for role, topic in TOPICS.items()}
 REQUIRED = ('instruction', 'goal', 'truth', 'map')
 
 

@@ -29,6 +29,7 @@ from std_msgs.msg import Header, String
 from . import convert
 from .processes import executable, stop_processes
 from .qos import LATCHED
+from ..core import topics
 from ..studies.measure import percentiles, rss_mb
 
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
@@ -47,10 +48,10 @@ class LatencyClient(Node):
 
     def __init__(self, context):
         super().__init__('bench_client', namespace=NAMESPACE, context=context)
-        self.map_pub = self.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
-        self.instruction_pub = self.create_publisher(String, 'instruction', 10)
+        self.map_pub = self.create_publisher(OccupancyGrid, topics.ENTITY_MAP, LATCHED)
+        self.instruction_pub = self.create_publisher(String, topics.INSTRUCTION, 10)
         self.received_at = None
-        self.create_subscription(PoseStamped, 'goal_pose', self.on_goal, 10)
+        self.create_subscription(PoseStamped, topics.GOAL_POSE, self.on_goal, 10)
         self.spinner = SingleThreadedExecutor(context=context)
         self.spinner.add_node(self)
 
@@ -60,7 +61,7 @@ class LatencyClient(Node):
     def connected(self) -> bool:
         return (
             self.instruction_pub.get_subscription_count() > 0
-            and self.count_publishers(f'{NAMESPACE}/goal_pose') > 0
+            and self.count_publishers(f'{NAMESPACE}/{topics.GOAL_POSE}') > 0
         )
 
     def spin_for(self, seconds: float) -> None:

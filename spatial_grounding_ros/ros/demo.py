@@ -39,26 +39,18 @@ from . import convert
 from .bag_recorder import RecordingThread
 from .processes import executable, stop_processes
 from .qos import LATCHED, STREAM
+from ..core import topics
 from ..core.entities import PUDDLEWORLD
 from ..data.bags import evaluate_bag
 from ..data.datasets import DEFAULT_DATA
 from ..studies.plots import plot_grounding
 from ..training.options import ranged
 
-RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
-    'entity_map': 'nav_msgs/msg/OccupancyGrid',
-    'instruction': 'std_msgs/msg/String',
-    'true_goal': 'geometry_msgs/msg/PoseStamped',
-    'true_value_map': 'std_msgs/msg/Float32MultiArray',
-    'true_reward_map': 'std_msgs/msg/Float32MultiArray',
-    'value_map_raw': 'std_msgs/msg/Float32MultiArray',
-    'value_map': 'nav_msgs/msg/OccupancyGrid',
-    'relation_map': 'nav_msgs/msg/OccupancyGrid',
-    'goal_pose': 'geometry_msgs/msg/PoseStamped',
-    'agent_pose': 'geometry_msgs/msg/PoseStamped',
-    'reward': 'std_msgs/msg/Float32',
-    'terminated': 'std_msgs/msg/Bool',
-    'diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
+RECORDED = {  # topic -> type: every topic of the two nodes but the action, unused here
+    # the nodes' diagnostics are remapped into the demo's namespace: recorded there
+    topic.lstrip('/'): msgtype
+    for topic, msgtype in topics.MSGTYPES.items()
+    if topic != topics.ACTION
 }
 # How long every followed subscription must have been matched before the watcher subscribes
 # to the instruction. A subscription counts a publisher as matched when its own reader has
@@ -66,16 +58,6 @@ RECORDED = {  # topic -> type; the first eight (LATCHED_TOPICS) are latched
 # a volatile goal_pose sent in between is lost (CI lost episode 0's once, with the faster
 # grounder answering within 2 ms of the instruction).
 MATCH_SETTLE_S = 1.0
-LATCHED_TOPICS = {
-    'entity_map',
-    'instruction',
-    'true_goal',
-    'true_value_map',
-    'true_reward_map',
-    'value_map_raw',
-    'value_map',
-    'relation_map',
-}
 
 
 class DemoWatcher(Node):
@@ -93,26 +75,28 @@ class DemoWatcher(Node):
         self.relation: OccupancyGrid | None = None
         self.true_goal: PoseStamped | None = None
         self.instruction = ''
-        self.create_subscription(PoseStamped, 'goal_pose', self.goals.append, 10)
-        self.create_subscription(PoseStamped, 'agent_pose', self.poses.append, STREAM)
-        self.create_subscription(Float32, 'reward', lambda m: self.rewards.append(m.data), STREAM)
-        self.create_subscription(Bool, 'terminated', self.on_terminated, STREAM)
+        self.create_subscription(PoseStamped, topics.GOAL_POSE, self.goals.append, 10)
+        self.create_subscription(PoseStamped, topics.AGENT_POSE, self.poses.append, STREAM)
         self.create_subscription(
-            OccupancyGrid, 'entity_map', lambda m: setattr(self, 'map_msg', m), LATCHED
+            Float32, topics.REWARD, lambda m: self.rewards.append(m.data), STREAM
+        )
+        self.create_subscription(Bool, topics.TERMINATED, self.on_terminated, STREAM)
+        self.create_subscription(
+            OccupancyGrid, topics.ENTITY_MAP, lambda m: setattr(self, 'map_msg', m), LATCHED
         )
         self.create_subscription(
-            Float32MultiArray, 'value_map_raw', lambda m: setattr(self, 'values', m), LATCHED
+            Float32MultiArray, topics.VALUE_MAP_RAW, lambda m: setattr(self, 'values', m), LATCHED
         )
         self.create_subscription(
-            OccupancyGrid, 'relation_map', lambda m: setattr(self, 'relation', m), LATCHED
+            OccupancyGrid, topics.RELATION_MAP, lambda m: setattr(self, 'relation', m), LATCHED
         )
         self.following = False  # subscribed to the instruction: see follow_instructions()
         self.matched_since: float | None = None  # every followed topic matched since then
         self.create_subscription(
-            PoseStamped, 'true_goal', lambda m: setattr(self, 'true_goal', m), LATCHED
+            PoseStamped, topics.TRUE_GOAL, lambda m: setattr(self, 'true_goal', m), LATCHED
         )
-        self.next_client = self.create_client(Trigger, 'next_episode')
-        self.reset_client = self.create_client(Trigger, 'reset_episode')
+        self.next_client = self.create_client(Trigger, topics.NEXT_EPISODE)
+        self.reset_client = self.create_client(Trigger, topics.RESET_EPISODE)
 
     def follow_instructions(self, others: Node) -> bool:
         """
@@ -132,7 +116,7 @@ class DemoWatcher(Node):
         self.matched_since = self.matched_since or time.monotonic()
         if time.monotonic() - self.matched_since >= MATCH_SETTLE_S:
             self.create_subscription(
-                String, 'instruction', lambda m: setattr(self, 'instruction', m.data), LATCHED
+                String, topics.INSTRUCTION, lambda m: setattr(self, 'instruction', m.data), LATCHED
             )
             self.following = True
         return self.following
@@ -212,7 +196,7 @@ def run_demo(
         else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
     )
     namespace = f'/demo_{os.getpid()}'
-    common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', '/diagnostics:=diagnostics']
+    common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', topics.DIAGNOSTICS_INTO_NAMESPACE]
     env = {
         **os.environ,
         'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
@@ -228,7 +212,7 @@ def run_demo(
     try:
         watcher = DemoWatcher(namespace)
         executor.add_node(watcher)
-        recording = RecordingThread(bag_path, RECORDED, LATCHED_TOPICS, namespace=namespace)
+        recording = RecordingThread(bag_path, RECORDED, topics.LATCHED, namespace=namespace)
         logs = {name: open(out / f'{name}.log', 'w') for name in ('grounder', 'gridworld')}
         processes = [
             subprocess.Popen(
@@ -279,7 +263,7 @@ def run_demo(
                 spin_until(
                     executor,
                     lambda: watcher.follow_instructions(recording.recorder)
-                    and watcher.count_subscribers(f'{namespace}/instruction') >= 3,
+                    and watcher.count_subscribers(f'{namespace}/{topics.INSTRUCTION}') >= 3,
                     600,
                     'grounder subscription',
                     running,

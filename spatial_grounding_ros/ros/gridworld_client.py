@@ -35,6 +35,7 @@ from std_srvs.srv import Trigger
 from . import convert
 from .processes import stop_processes
 from .qos import LATCHED, STREAM
+from ..core import topics
 from ..core.world import ACTIONS
 from ..training.env import observation_space
 
@@ -64,14 +65,14 @@ class GridWorldClient(Node):
         self.poses: list[PoseStamped] = []
         self.rewards: list[float] = []
         self.terminals: list[bool] = []
-        self.create_subscription(OccupancyGrid, 'entity_map', self.on_map, LATCHED)
-        self.create_subscription(String, 'instruction', self.on_instruction, LATCHED)
-        self.create_subscription(PoseStamped, 'agent_pose', self.on_pose, STREAM)
-        self.create_subscription(Float32, 'reward', self.on_reward, STREAM)
-        self.create_subscription(Bool, 'terminated', self.on_terminated, STREAM)
-        self.action_pub = self.create_publisher(Int32, 'action', STREAM)
+        self.create_subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_map, LATCHED)
+        self.create_subscription(String, topics.INSTRUCTION, self.on_instruction, LATCHED)
+        self.create_subscription(PoseStamped, topics.AGENT_POSE, self.on_pose, STREAM)
+        self.create_subscription(Float32, topics.REWARD, self.on_reward, STREAM)
+        self.create_subscription(Bool, topics.TERMINATED, self.on_terminated, STREAM)
+        self.action_pub = self.create_publisher(Int32, topics.ACTION, STREAM)
         self.action_space = spaces.Discrete(len(ACTIONS))
-        self.next_client = self.create_client(Trigger, 'next_episode')
+        self.next_client = self.create_client(Trigger, topics.NEXT_EPISODE)
         self.steps = 0
         self.done = True
 
@@ -172,7 +173,7 @@ def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
         '-r',
         f'__ns:={namespace}',
         '-r',
-        '/diagnostics:=diagnostics',
+        topics.DIAGNOSTICS_INTO_NAMESPACE,
     ]
     for k, v in params.items():
         cmd += ['-p', f'{k}:={v}']

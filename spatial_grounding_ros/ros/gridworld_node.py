@@ -35,6 +35,7 @@ from std_srvs.srv import Trigger
 from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .qos import LATCHED, STREAM
+from ..core import topics
 from ..core import world
 from ..core.tasks import TASKS
 from ..data.datasets import DEFAULT_DATA, SPLITS
@@ -152,21 +153,23 @@ class GridWorldNode(Node):
             f'{len(data)} episodes from {data.name}, {self.env.shape[0]}x{self.env.shape[1]} cells'
         )
 
-        self.map_pub = self.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
-        self.instruction_pub = self.create_publisher(String, 'instruction', LATCHED)
-        self.true_goal_pub = self.create_publisher(PoseStamped, 'true_goal', LATCHED)
-        self.true_values_pub = self.create_publisher(Float32MultiArray, 'true_value_map', LATCHED)
-        self.true_rewards_pub = self.create_publisher(
-            Float32MultiArray, 'true_reward_map', LATCHED
+        self.map_pub = self.create_publisher(OccupancyGrid, topics.ENTITY_MAP, LATCHED)
+        self.instruction_pub = self.create_publisher(String, topics.INSTRUCTION, LATCHED)
+        self.true_goal_pub = self.create_publisher(PoseStamped, topics.TRUE_GOAL, LATCHED)
+        self.true_values_pub = self.create_publisher(
+            Float32MultiArray, topics.TRUE_VALUE_MAP, LATCHED
         )
-        self.pose_pub = self.create_publisher(PoseStamped, 'agent_pose', STREAM)
-        self.reward_pub = self.create_publisher(Float32, 'reward', STREAM)
-        self.terminated_pub = self.create_publisher(Bool, 'terminated', STREAM)
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(Int32, 'action', self.on_action, STREAM)
-        self.create_subscription(PoseStamped, 'goal_pose', self.on_goal_pose, 10)
-        self.create_service(Trigger, 'reset_episode', self.on_reset)
-        self.create_service(Trigger, 'next_episode', self.on_next)
+        self.true_rewards_pub = self.create_publisher(
+            Float32MultiArray, topics.TRUE_REWARD_MAP, LATCHED
+        )
+        self.pose_pub = self.create_publisher(PoseStamped, topics.AGENT_POSE, STREAM)
+        self.reward_pub = self.create_publisher(Float32, topics.REWARD, STREAM)
+        self.terminated_pub = self.create_publisher(Bool, topics.TERMINATED, STREAM)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self.create_subscription(Int32, topics.ACTION, self.on_action, STREAM)
+        self.create_subscription(PoseStamped, topics.GOAL_POSE, self.on_goal_pose, 10)
+        self.create_service(Trigger, topics.RESET_EPISODE, self.on_reset)
+        self.create_service(Trigger, topics.NEXT_EPISODE, self.on_next)
         self.path_policy: np.ndarray | None = None  # greedy actions toward a goal_pose
         self.path_goal: tuple[int, int] | None = None
         self.walk_timer = self.create_timer(self.param('step_period'), self.walk_step)

@@ -47,6 +47,7 @@ from . import convert
 from .node_support import declare_parameters, Param, report, spin
 from .package_files import find_config
 from .qos import LATCHED
+from ..core import topics
 from ..core.entities import EntityTable
 from ..grounder import DEFAULT_CHECKPOINT, Grounder
 from ..models.checkpoints import load_checkpoint, resolve_checkpoint
@@ -193,24 +194,28 @@ class GrounderNode(LifecycleNode):
             if not self.autostarting:
                 self.get_logger().error(f'configure failed: {self.configure_error}')
             return TransitionCallbackReturn.FAILURE
-        self.goal_pub = self.create_lifecycle_publisher(PoseStamped, 'goal_pose', 10)
-        self.value_map_pub = self.create_lifecycle_publisher(OccupancyGrid, 'value_map', LATCHED)
+        self.goal_pub = self.create_lifecycle_publisher(PoseStamped, topics.GOAL_POSE, 10)
+        self.value_map_pub = self.create_lifecycle_publisher(
+            OccupancyGrid, topics.VALUE_MAP, LATCHED
+        )
         self.value_raw_pub = self.create_lifecycle_publisher(
-            Float32MultiArray, 'value_map_raw', LATCHED
+            Float32MultiArray, topics.VALUE_MAP_RAW, LATCHED
         )
         self.relation_map_pub = self.create_lifecycle_publisher(
-            OccupancyGrid, 'relation_map', LATCHED
+            OccupancyGrid, topics.RELATION_MAP, LATCHED
         )
         # diagnostics also while inactive: they say why an instruction was not grounded
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self.topics = [
             self.goal_pub,
             self.value_map_pub,
             self.value_raw_pub,
             self.relation_map_pub,
             self.diagnostics_pub,
-            self.create_subscription(OccupancyGrid, 'entity_map', self.on_entity_map, LATCHED),
-            self.create_subscription(String, 'instruction', self.on_instruction, 10),
+            self.create_subscription(
+                OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED
+            ),
+            self.create_subscription(String, topics.INSTRUCTION, self.on_instruction, 10),
         ]
         return super().on_configure(state)
 
