@@ -176,6 +176,122 @@ def spin_until(executor, condition, timeout: float, what: str, processes=()) -> 
         executor.spin_once(timeout_sec=0.02)
 
 
+def start_nodes(logs: dict, common: list[str], source: list[str], gridworld: list[str]) -> list:
+    """Start the grounder and gridworld processes, each writing to its log in `logs`."""
+    env = {
+        **os.environ,
+        'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
+            'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST'
+        ),
+    }
+    return [
+        subprocess.Popen(
+            executable('grounder') + common,
+            env=env,
+            stdout=logs['grounder'],
+            stderr=subprocess.STDOUT,
+        ),
+        subprocess.Popen(
+            executable('gridworld') + common + source + gridworld,
+            env=env,
+            stdout=logs['gridworld'],
+            stderr=subprocess.STDOUT,
+        ),
+    ]
+
+
+def follow_episode(
+    executor, watcher: DemoWatcher, running: dict, step_limit: int, step_period: float
+) -> dict:
+    """
+    Wait for the grounder's goal and the agent's walk to it; return what the watcher saw.
+
+    The episode has begun: its instruction is out (or about to be), and the watcher was cleared.
+    """
+    spin_until(
+        executor,
+        lambda: (watcher.goals and watcher.values is not None and watcher.relation is not None),
+        60,
+        'grounding',
+        running,
+    )
+    goal = watcher.cell(watcher.goals[0])
+
+    def settled() -> bool:
+        at = watcher.cell(watcher.poses[-1]) if watcher.poses else None
+        return watcher.moves_complete() and (
+            watcher.terminated or at == goal or len(watcher.rewards) >= step_limit
+        )
+
+    spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival', running)
+    path = [watcher.cell(p) for p in watcher.poses]
+    truth = watcher.cell(watcher.true_goal)
+    return {
+        'goal': goal,
+        'truth': truth,
+        'end': path[-1],
+        'reached': watcher.terminated,
+        'md': abs(goal[0] - truth[0]) + abs(goal[1] - truth[1]),
+        'reward': float(sum(watcher.rewards)),
+        'path': path,
+    }
+
+
+def draw_episode(out: Path, k: int, watcher: DemoWatcher, seen: dict) -> None:
+    """Draw episode `k` to a PNG and print its line."""
+    goal, truth, path = seen['goal'], seen['truth'], seen['path']
+    instruction = watcher.instruction
+    grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10**6)
+    values = convert.float32_multiarray_to_value_map(watcher.values)
+    relation = convert.occupancy_grid_to_grid(watcher.relation, 10**6).astype(float)
+    png = plot_grounding(
+        out / f'episode_{k}.png',
+        grid,
+        PUDDLEWORLD,
+        values,
+        relation,
+        instruction,
+        goal,
+        truth,
+        path_cells=path,
+    )
+    outcome = (
+        'reached the true goal'
+        if seen['reached']
+        else 'stopped at its goal_pose, not the true goal'
+        if path[-1] == goal
+        else 'did not get to its goal_pose'
+    )
+    line = (
+        f'[{k}] {instruction!r}: goal {goal}, true {truth}, '
+        f'{outcome}, '
+        f'Manhattan error {seen["md"]}, {len(path) - 1} moves, reward {seen["reward"]:g} -> {png}'
+    )
+    print(line, flush=True)
+
+
+def summarise(lines: list[dict], bag_path: Path, recorded: dict) -> dict:
+    """Print and return the demo's summary, with the metrics computed back from the bag."""
+    summary = {
+        'episodes': len(lines),
+        'reached': sum(line['reached'] for line in lines),
+        'md': float(np.mean([line['md'] for line in lines])) if lines else None,
+        'reward': float(np.mean([line['reward'] for line in lines])) if lines else None,
+        'bag': str(bag_path),
+        'from_bag': evaluate_bag(bag_path).metrics(),
+        'recorded': recorded,
+        'per_episode': lines,
+    }
+    bag = summary['from_bag']
+    print(
+        f'summary: {summary["reached"]}/{summary["episodes"]} episodes reached the goal, '
+        f'mean Manhattan error {summary["md"]:.2f}, mean reward {summary["reward"]:.2f}; '
+        f'eval-bag on {bag_path}: n {bag["n"]}, MD {bag["md"]:.2f}, HIT {bag["hit"]:.2f}'
+        + (f', PQ {bag["pq"]:.3f}, MSE {bag["mse"]:.3f}' if 'pq' in bag else '')
+    )
+    return summary
+
+
 def run_demo(
     out: str | Path,
     episodes: int = 5,
@@ -184,6 +300,7 @@ def run_demo(
     step_period: float = 0.05,
     step_limit: int = 40,
 ) -> dict:
+    """Run `episodes` episodes of the closed loop into `out`; return the summary."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bag_path = out / 'demo_bag'
@@ -197,12 +314,20 @@ def run_demo(
     )
     namespace = f'/demo_{os.getpid()}'
     common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', topics.DIAGNOSTICS_INTO_NAMESPACE]
-    env = {
-        **os.environ,
-        'ROS_AUTOMATIC_DISCOVERY_RANGE': os.environ.get(
-            'ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST'
-        ),
-    }
+    # the first episode waits for the instruction's three subscribers: the grounder, the
+    # recorder and the watcher
+    gridworld = [
+        '-p',
+        f'seed:={seed}',
+        '-p',
+        'order:=sequential',
+        '-p',
+        f'step_limit:={step_limit}',
+        '-p',
+        f'step_period:={step_period}',
+        '-p',
+        'start_after_subscribers:=3',
+    ]
     rclpy.init()
     watcher = recording = None
     processes, logs = [], {}
@@ -214,36 +339,7 @@ def run_demo(
         executor.add_node(watcher)
         recording = RecordingThread(bag_path, RECORDED, topics.LATCHED, namespace=namespace)
         logs = {name: open(out / f'{name}.log', 'w') for name in ('grounder', 'gridworld')}
-        processes = [
-            subprocess.Popen(
-                executable('grounder') + common,
-                env=env,
-                stdout=logs['grounder'],
-                stderr=subprocess.STDOUT,
-            ),
-            # the first episode waits for the instruction's three subscribers: the grounder,
-            # the recorder and the watcher
-            subprocess.Popen(
-                executable('gridworld')
-                + common
-                + source
-                + [
-                    '-p',
-                    f'seed:={seed}',
-                    '-p',
-                    'order:=sequential',
-                    '-p',
-                    f'step_limit:={step_limit}',
-                    '-p',
-                    f'step_period:={step_period}',
-                    '-p',
-                    'start_after_subscribers:=3',
-                ],
-                env=env,
-                stdout=logs['gridworld'],
-                stderr=subprocess.STDOUT,
-            ),
-        ]
+        processes = start_nodes(logs, common, source, gridworld)
         running = {
             Path(logs[name].name): p for name, p in zip(('grounder', 'gridworld'), processes)
         }
@@ -268,68 +364,11 @@ def run_demo(
                     'grounder subscription',
                     running,
                 )
-            spin_until(
-                executor,
-                lambda: (
-                    watcher.goals and watcher.values is not None and watcher.relation is not None
-                ),
-                60,
-                'grounding',
-                running,
-            )
-            goal = watcher.cell(watcher.goals[0])
-
-            def settled() -> bool:
-                at = watcher.cell(watcher.poses[-1]) if watcher.poses else None
-                return watcher.moves_complete() and (
-                    watcher.terminated or at == goal or len(watcher.rewards) >= step_limit
-                )
-
-            spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival', running)
+            seen = follow_episode(executor, watcher, running, step_limit, step_period)
             for topic, n in watcher.seen().items():
                 recorded_total[topic] = recorded_total.get(topic, 0) + n
-            path = [watcher.cell(p) for p in watcher.poses]
-            truth = watcher.cell(watcher.true_goal)
-            error = abs(goal[0] - truth[0]) + abs(goal[1] - truth[1])
-            instruction = watcher.instruction
-            grid = convert.occupancy_grid_to_grid(watcher.map_msg, 10**6)
-            values = convert.float32_multiarray_to_value_map(watcher.values)
-            relation = convert.occupancy_grid_to_grid(watcher.relation, 10**6).astype(float)
-            png = plot_grounding(
-                out / f'episode_{k}.png',
-                grid,
-                PUDDLEWORLD,
-                values,
-                relation,
-                instruction,
-                goal,
-                truth,
-                path_cells=path,
-            )
-            reward = float(sum(watcher.rewards))
-            outcome = (
-                'reached the true goal'
-                if watcher.terminated
-                else 'stopped at its goal_pose, not the true goal'
-                if path[-1] == goal
-                else 'did not get to its goal_pose'
-            )
-            line = (
-                f'[{k}] {instruction!r}: goal {goal}, true {truth}, '
-                f'{outcome}, '
-                f'Manhattan error {error}, {len(path) - 1} moves, reward {reward:g} -> {png}'
-            )
-            print(line, flush=True)
-            lines.append(
-                {
-                    'goal': goal,
-                    'truth': truth,
-                    'end': path[-1],
-                    'reached': watcher.terminated,
-                    'md': error,
-                    'reward': reward,
-                }
-            )
+            draw_episode(out, k, watcher, seen)
+            lines.append({k: v for k, v in seen.items() if k != 'path'})
         # the recorder hears what the watcher heard; wait until the bag holds it all
         full = {t: f'{namespace}/{t}' for t in recorded_total}
         spin_until(
@@ -350,24 +389,7 @@ def run_demo(
         stop_processes(*processes)
         for log in logs.values():
             log.close()
-    summary = {
-        'episodes': len(lines),
-        'reached': sum(line['reached'] for line in lines),
-        'md': float(np.mean([line['md'] for line in lines])) if lines else None,
-        'reward': float(np.mean([line['reward'] for line in lines])) if lines else None,
-        'bag': str(bag_path),
-        'from_bag': evaluate_bag(bag_path).metrics(),
-        'recorded': recorded,
-        'per_episode': lines,
-    }
-    bag = summary['from_bag']
-    print(
-        f'summary: {summary["reached"]}/{summary["episodes"]} episodes reached the goal, '
-        f'mean Manhattan error {summary["md"]:.2f}, mean reward {summary["reward"]:.2f}; '
-        f'eval-bag on {bag_path}: n {bag["n"]}, MD {bag["md"]:.2f}, HIT {bag["hit"]:.2f}'
-        + (f', PQ {bag["pq"]:.3f}, MSE {bag["mse"]:.3f}' if 'pq' in bag else '')
-    )
-    return summary
+    return summarise(lines, bag_path, recorded)
 
 
 def cmd_closed_loop_demo(args) -> int:
