@@ -9,7 +9,9 @@ The package's import layers.
 
 Every import statement of the package (at the top of a module or inside a function) is read
 from the source: no module may import itself back through others, nothing imports cli.py (the
-one top floor), and only modules under ros/ import rclpy, so the core runs without ROS.
+one top floor), only modules under ros/ import rclpy, so the core runs without ROS, and a module
+imports only modules of its own floor or below (FLOORS), so each floor can be read, tested and
+reused without the ones above it.
 """
 
 import ast
@@ -108,3 +110,70 @@ def test_rclpy_only_under_ros():
         and any(m.split('.')[0] in ('rclpy', 'rosidl_runtime_py') for m in imports(f))
     )
     assert not outside, f'{outside} import rclpy outside ros/'
+
+
+# Lowest first; a module imports only modules of its own floor or below. studies/ and shapeworld/
+# share a floor (neither imports the other). The package's own __init__ is empty: floor 0.
+FLOORS = (
+    ('core',),
+    ('models',),
+    ('data',),
+    ('training',),
+    ('grounder',),
+    ('studies', 'shapeworld'),
+    ('ros',),
+    ('cli',),
+)
+# Upward imports that are known and why; each must still exist (test_upward_exceptions_are_real).
+UPWARD = {
+    (f'{PACKAGE}.studies.bench', f'{PACKAGE}.ros.bench_ros'): (
+        'bench measures the end-to-end ROS latency too; the import is lazy, inside run(), '
+        'behind --skip-ros, so studies still load without rclpy. To remove: cli.py passes '
+        'ros.bench_ros.round_trip_latency to bench.run'
+    ),
+}
+
+
+def floor(module: str) -> int:
+    """Return the floor of a module of the package (its first folder, or file, under it)."""
+    parts = module.split('.')
+    if len(parts) == 1:
+        return 0
+    for level, names in enumerate(FLOORS):
+        if parts[1] in names:
+            return level
+    raise AssertionError(f'{module} is on no floor: add its folder to FLOORS')
+
+
+def upward_imports(graph: dict[str, set[str]]) -> set[tuple[str, str]]:
+    return {
+        (module, dep)
+        for module, deps in graph.items()
+        for dep in deps
+        if floor(dep) > floor(module)
+    }
+
+
+def test_floor_finder_sees_an_upward_import():
+    core, models = f'{PACKAGE}.core.world', f'{PACKAGE}.models.trnet'
+    graph = {core: {models}, models: set()}
+    assert upward_imports(graph) == {(core, models)}
+
+
+def test_every_module_is_on_a_floor():
+    for module in package_graph():
+        floor(module)
+
+
+def test_imports_go_down_the_floors():
+    """core < models < data < training < grounder < studies, shapeworld < ros < cli."""
+    upward = sorted(upward_imports(package_graph()) - set(UPWARD))
+    assert not upward, 'imports from a higher floor:\n' + '\n'.join(
+        f'  {module} (floor {floor(module)}) imports {dep} (floor {floor(dep)})'
+        for module, dep in upward
+    )
+
+
+def test_upward_exceptions_are_real():
+    stale = sorted(set(UPWARD) - upward_imports(package_graph()))
+    assert not stale, f'{stale} no longer import upward: remove them from UPWARD'
