@@ -365,10 +365,9 @@ def test_cost_encoding_puts_the_goal_cell_at_0(nodes, reference):
 
 class FailingModel(torch.nn.Module):
     """
-    Return a model whose grounding raises as torch does when memory runs out.
+    A model whose grounding raises as torch does when memory runs out.
 
-    A model whose grounding raises as torch does when a map needs more memory than there
-    is (a real request on a huge map can; this one does it on demand).
+    A real request on a huge map can; this one does it on demand.
     """
 
     def text_code(self, tokens):

@@ -8,12 +8,12 @@
 Keep freed memory in the process for the next tensor of its size.
 
 glibc's malloc gives every block over 128 KB a mapping of its own and returns it to the
-system on free. A training step makes and frees the same tensors of 2 to 8 MB every time, so
-each one's pages fault in again, zeroed by the kernel: in a fresh process a 10x10 t-RNetAttn
-training step took 37 ms that way and 30 ms with the memory kept (one thread). A whole
-training run gains less (3%: glibc raises its own threshold once validation's large batches
-are freed); grounding a 512x512 map gains about 10%. What is kept is the process's own peak,
-which it reaches anyway.
+system on free. A training step makes and frees the same tensors of a few megabytes every
+time, so each one's pages fault in again, zeroed by the kernel: keeping them makes a step in a
+fresh process clearly faster. A whole training run gains less, as glibc raises its own
+threshold once validation's large batches are freed, and so does grounding a large map (the
+measured figures: docs/benchmarks.md, "Figures behind design choices in the code"). What is
+kept is the process's own peak, which it reaches anyway.
 
 Called once by `spatial-grounding` and by the node executables, before any tensor is made.
 On a C library without mallopt (not glibc) nothing changes.

@@ -67,9 +67,9 @@ _PW = {
 # PW local's and PW global's own recipe (the paper's per-task rows): the generated worlds of
 # every family are what the node's default needs for clear references on maps of any size; on
 # one task's 10x10 human test maps they cost time and MSE. Without them, with a light goal
-# cross-entropy (PW local t-RNetAttn test MSE 0.278 at weight 1, 0.142-0.147 at 0.1, 0.127-0.135
-# at 0.05) and 30 epochs, t-RNetAttn trains in 2.2 minutes on 2 cores and is ahead of the previous
-# recipe's 7 minutes on every metric (docs/benchmarks.md).
+# cross-entropy (the lighter its weight, the lower the test MSE and the rarer the exact goal)
+# and 30 epochs, t-RNetAttn trains in a third of the previous recipe's time and is ahead of it
+# on every metric (the figures: docs/benchmarks.md, "Figures behind design choices in the code").
 _PW_ONE_MODE = {**_PW, 'epochs': 30, 'synthetic': 0, 'goal_weight': 0.05}
 
 TASKS = {
@@ -127,7 +127,7 @@ TASKS = {
             goal_weight=0.0,
             model={},
             # less than PuddleWorld: t-RNetAttn's attention phase is slowest on ISI's long
-            # instructions, and the runs are sized for about an hour on 2 cores
+            # instructions, and `make reproduce-rl` should stay a run of about an hour
             rl_episodes=12_000,
             paper={
                 't-cnn': (0.15, None, 3.14),

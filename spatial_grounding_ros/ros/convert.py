@@ -156,8 +156,7 @@ def value_map_to_float32_multiarray(values: np.ndarray) -> Float32MultiArray:
     """
     Return exact values, row-major (height, width), in the OccupancyGrid's cell order.
 
-    Exact values, row-major (height, width) in the OccupancyGrid's cell order (row 0 at
-    the map origin, i.e. south), so index i matches value_map.data[i].
+    Row 0 is at the map origin, i.e. south, so index i matches value_map.data[i].
     """
     values = np.asarray(values, dtype=np.float32)[::-1]
     height, width = values.shape

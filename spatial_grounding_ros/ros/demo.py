@@ -55,8 +55,8 @@ RECORDED = {  # topic -> type: every topic of the two nodes but the action, unus
 # How long every followed subscription must have been matched before the watcher subscribes
 # to the instruction. A subscription counts a publisher as matched when its own reader has
 # matched the writer; the writer in the other process matches the reader a moment later, and
-# a volatile goal_pose sent in between is lost (CI lost episode 0's once, with the faster
-# grounder answering within 2 ms of the instruction).
+# a volatile goal_pose sent in between is lost (CI lost episode 0's once, when the grounder
+# had become fast enough to answer in that moment).
 MATCH_SETTLE_S = 1.0
 
 

@@ -149,10 +149,10 @@ class GridWorldClient(Node):
 @contextlib.contextmanager
 def ros_envs(task: str, data_dir: str, train, cfg, seed: int):
     """
-    Start a gridworld node process serving `task`'s train split.
+    Start a gridworld node process serving `task`'s train split; yield [a client of it].
 
-    Start a gridworld node process serving `task`'s train split (or the same generated
-    worlds as `train`) in a namespace of its own, and yield one client environment.
+    A generated task serves the same worlds as `train`. The node runs in a namespace of its
+    own (this process's id), so parallel runs never share topics; it is stopped on exit.
     """
     namespace = f'/rl_{os.getpid()}'
     step_limit = cfg.step_limit or 5 * max(train.grids.shape[1:])

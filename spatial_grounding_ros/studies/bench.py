@@ -76,8 +76,7 @@ def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
     """
     Return a generated PuddleWorld-style `size` x `size` grid with one of its instructions.
 
-    A generated PuddleWorld-style grid of `size` x `size` with one of its own instructions
-    (objects scale with the area so large maps are not empty grass).
+    Objects scale with the area, so large maps are not empty grass.
     """
     rng = np.random.default_rng(seed)
     while True:

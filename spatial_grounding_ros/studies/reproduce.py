@@ -181,8 +181,8 @@ def reproduce_ablation(
     """
     Train `model` on pw once per ABLATIONS row and score each run.
 
-    Train `model` on pw once per ABLATIONS row and score each on the suite (10x10 and
-    32x32) and the human test splits: results/ablation.json and results/ablation.md.
+    Each run is scored on the suite (10x10 and 32x32) and the human test splits; the rows go
+    to results/ablation.json and results/ablation.md.
     """
     from . import suite
 
