@@ -5,9 +5,7 @@
 # https://opensource.org/licenses/MIT.
 
 """
-A plain Python API over a trained model.
-
-A plain Python API over a trained model, for users who do not want topics:
+A plain Python API over a trained model, for users who do not want topics.
 
     g = Grounder.from_checkpoint()                    # the packaged pw_t-rnet-attn
     result = g.ground(grid, "reach cell two below the westernmost rock")
@@ -26,6 +24,7 @@ import torch
 
 from .core.text import tokenize, UNK
 from .models.checkpoints import load_checkpoint, Loaded
+from .models.protocol import TextCode
 
 DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 
@@ -54,7 +53,7 @@ class Grounder:
         self.loaded, self.cached_instructions = loaded, cached_instructions
         self.model, self.vocab, self.entities = loaded.model, loaded.vocab, loaded.entities
         self.model.eval()
-        self.text_codes: OrderedDict[str, dict] = OrderedDict()  # least recently used first
+        self.text_codes: OrderedDict[str, TextCode] = OrderedDict()  # least recently used first
 
     @classmethod
     def from_checkpoint(cls, checkpoint: str = DEFAULT_CHECKPOINT) -> 'Grounder':
@@ -96,7 +95,7 @@ class Grounder:
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
-    def text_code(self, instruction: str) -> dict:
+    def text_code(self, instruction: str) -> TextCode:
         """Return the model's text code of an instruction, computed once while it is in use."""
         code = self.text_codes.pop(instruction, None)
         if code is None:

@@ -22,7 +22,7 @@ from spatial_grounding_ros.models.encoders import present_kinds, shifted
 from spatial_grounding_ros.models.far import FAR_BEYOND, FAR_REACH, squared_distances
 from spatial_grounding_ros.models.head import AxialViews
 from spatial_grounding_ros.models.registry import build_model, MODELS
-from spatial_grounding_ros.models.relation import tanh
+from spatial_grounding_ros.models.relation import split_params, tanh
 from spatial_grounding_ros.models.trnet import TRNet
 import torch
 
@@ -156,7 +156,7 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost, sh
         model.far_log_cost.fill_(log_cost)
         kinds = present_kinds(grids, 12)
         table = model.far_table(model.text(tokens), kinds)
-        far = model.far_map(grids, kinds, table)
+        far = model.far_relation(grids, kinds, table)
     row = {int(k): n for n, k in enumerate(kinds)}
     cost = float(np.exp(log_cost))
     for b in range(batch):
@@ -170,7 +170,7 @@ def test_far_map_is_the_distance_discounted_maximum_over_cell_pairs(log_cost, sh
             assert float(far[b, r, c]) == pytest.approx(want, abs=1e-5)
     # and the same gradients, to the table and to the cost, as the maximum over all pairs
     table = table.clone().requires_grad_()
-    model.far_map(grids, kinds, table).sum().backward()
+    model.far_relation(grids, kinds, table).sum().backward()
     got = table.grad.clone(), model.far_log_cost.grad.clone()
     table.grad, model.far_log_cost.grad = None, None
     cells = torch.tensor(list(np.ndindex(height, width)))
@@ -337,7 +337,8 @@ def test_word_matmuls_equal_per_pair_weights():
         score = torch.einsum('bnpd,bld->bnpl', pair, model.attn(words))
         alpha = score.masked_fill(~mask[:, None, None, :], float('-inf')).softmax(-1)
         h_ij = torch.einsum('bnpl,blh->bnph', alpha, words)  # (B, N, 8, 30)
-        w1, w2, w3 = model.split_params(model.decoder(h_ij))  # per pair (.., out, in)
+        # per pair (.., out, in)
+        w1, w2, w3 = split_params(model.decoder(h_ij), model.layer_shapes)
         rel = relative_positions(1).expand(b, h * w, -1).unsqueeze(-1)
         x = torch.cat([pair, rel], -1).unsqueeze(-1)  # (B, N, 8, 2k+1, 1)
         r = (w3 @ torch.tanh(w2 @ torch.tanh(w1 @ x))).squeeze(-1).squeeze(-1)

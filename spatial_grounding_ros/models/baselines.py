@@ -15,9 +15,10 @@ import torch.nn.functional as F
 from .config import head_code_size, ModelConfig
 from .encoders import EntityEncoder, TextEncoder
 from .head import build_head, outputs
+from .protocol import Capabilities, EntityRows, KernelCode, TextVectorCode
 
 
-class TCNN(nn.Module):
+class TCNN(EntityRows, nn.Module):
     """
     t-CNN (Janner et al. 2018 as in the paper's appendix).
 
@@ -37,24 +38,33 @@ class TCNN(nn.Module):
         self.decoder = nn.Linear(cfg.hidden, kernel + head_code_size(cfg.head, cfg.head_text))
         self.head = build_head(cfg)
 
+    @staticmethod
+    def supports() -> Capabilities:
+        """Return what t-CNN supports: the entity table's extra rows, no attention, no far map."""
+        return Capabilities(unseen_rows=True, distractor_rows=True)
+
+    @property
+    def capabilities(self) -> Capabilities:
+        return self.supports()
+
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         return self.ground(grids, self.text_code(tokens), return_aux)
 
-    def text_code(self, tokens: torch.Tensor) -> dict:
+    def text_code(self, tokens: torch.Tensor) -> KernelCode:
         """All that an instruction contributes: the kernel (B, k, 3, 3) and the head's code."""
         vec = self.decoder(self.text(tokens)[2])
         kernels = vec[:, :9 * self.cfg.embed_dim].unflatten(1, (self.cfg.embed_dim, 3, 3))
-        return {'kernels': kernels, 'head': vec[:, 9 * self.cfg.embed_dim:]}
+        return KernelCode(kernels=kernels, head=vec[:, 9 * self.cfg.embed_dim:])
 
-    def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
+    def ground(self, grids: torch.Tensor, code: KernelCode, return_aux: bool = False):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
         b, h, w = grids.shape
         k = self.cfg.embed_dim
         phi = self.phi(grids).permute(0, 3, 1, 2)  # (B, k, H+2, W+2)
-        kernels = code['kernels'].expand(b, -1, -1, -1).reshape(b, k, 3, 3)
+        kernels = code.kernels.expand(b, -1, -1, -1).reshape(b, k, 3, 3)
         # one kernel per example: a grouped convolution over the batch
         z1 = F.conv2d(phi.reshape(1, b * k, h + 2, w + 2), kernels, groups=b).view(b, h, w)
-        values = self.head(z1, code['head'].expand(b, -1))
+        values = self.head(z1, code.head.expand(b, -1))
         return outputs(values, z1, None, return_aux)
 
 
@@ -84,17 +94,26 @@ class TUVFA(nn.Module):
             nn.ConvTranspose2d(c, 1, 3, padding=1),
         )
 
+    @staticmethod
+    def supports() -> Capabilities:
+        """Return what t-UVFA supports: nothing beyond the kinds (its table has no extra rows)."""
+        return Capabilities()
+
+    @property
+    def capabilities(self) -> Capabilities:
+        return self.supports()
+
     def forward(self, grids: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         return self.ground(grids, self.text_code(tokens), return_aux)
 
-    def text_code(self, tokens: torch.Tensor) -> dict:
+    def text_code(self, tokens: torch.Tensor) -> TextVectorCode:
         """All that an instruction contributes: the text vector (B, 7)."""
-        return {'text': self.to_text(self.text(tokens)[2])}
+        return TextVectorCode(text=self.to_text(self.text(tokens)[2]))
 
-    def ground(self, grids: torch.Tensor, code: dict, return_aux: bool = False):
+    def ground(self, grids: torch.Tensor, code: TextVectorCode, return_aux: bool = False):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
         b, h, w = grids.shape
         state = self.state(self.phi(grids).permute(0, 3, 1, 2))
-        text = code['text'].expand(b, -1)[:, :, None, None].expand(-1, -1, h, w)
+        text = code.text.expand(b, -1)[:, :, None, None].expand(-1, -1, h, w)
         values = self.deconv(torch.cat([state, text], 1)).squeeze(1)
         return outputs(values, torch.zeros_like(values), None, return_aux)

@@ -8,6 +8,9 @@
 
 from __future__ import annotations
 
+from typing import Callable
+
+import numpy as np
 import torch
 from torch import nn
 import torch.nn.functional as F
@@ -77,6 +80,16 @@ class EntityEncoder(nn.Module):
         distractors = torch.zeros(cfg.distractor_kinds, cfg.embed_dim)  # redrawn each step
         self.embed.weight = nn.Parameter(torch.cat([self.embed.weight.data, unseen, distractors]))
         self.embed.num_embeddings += cfg.unseen_kinds + cfg.distractor_kinds
+        self.unseen_ids = unseen_kind_ids(cfg.n_entities, cfg.unseen_kinds)
+        self.distractor_ids = distractor_kind_ids(cfg)
+
+    def redraw_distractors(self, draw: Callable[[tuple[int, int]], np.ndarray]) -> None:
+        """Set the distractor rows to `draw((rows, k))`: new draws, never learned."""
+        weight = self.embed.weight
+        with torch.no_grad():
+            weight[self.distractor_ids] = torch.from_numpy(
+                draw((len(self.distractor_ids), weight.shape[1]))
+            ).to(weight)
 
     def with_unseen_rows(self, weight: torch.Tensor) -> torch.Tensor:
         """
@@ -115,6 +128,23 @@ def shifted(padded: torch.Tensor, radius: int) -> list[torch.Tensor]:
 def present_kinds(grids: torch.Tensor, n_entities: int) -> torch.Tensor:
     """Return the entity kinds in `grids`, ascending (a count, not a sort: cheap on big maps)."""
     return torch.bincount(grids.flatten(), minlength=n_entities).nonzero().flatten()
+
+
+def kind_rows(grids: torch.Tensor, kinds: torch.Tensor, n_kinds: int) -> torch.Tensor:
+    """
+    Return each cell's row in a table over `kinds`, (B, H*W); a kind it lacks: an error.
+
+    `kinds` (K,): one table for every map; (B, K): one per map. `n_kinds`: the entity table's
+    rows.
+    """
+    kinds = kinds.expand(len(grids), -1)  # a shared table: the same kinds for every map
+    row = torch.full((len(grids), n_kinds), -1, device=grids.device)
+    row.scatter_(1, kinds, torch.arange(kinds.shape[1], device=grids.device).expand_as(kinds))
+    cells = row.gather(1, grids.flatten(1))
+    if cells.min() < 0:
+        missing = sorted(set(grids.flatten(1)[cells < 0].tolist()))
+        raise ValueError(f'the relation table lacks entity kinds {missing} of the grid')
+    return cells
 
 
 def kinds_per_map(grids: torch.Tensor, n_kinds: int, off_map: int) -> torch.Tensor:

@@ -25,7 +25,7 @@ for replacing the final convolution layer with a dense layer followed by a softm
   well a cell fits the subject and the reference, with weights decoded from the attended
   subject and reference words (a k-vector and a bias each); f is the relation MLP (10, 10, 1,
   tanh, the paper's sizes) on the offset l_ij of j from i, its weights decoded from the
-  relation words, as on grids (TRNet.split_params, TRNet.relation_mlp). The r_ij are
+  relation words, as on grids (models.relation's split_params and relation_mlp). The r_ij are
   log-potentials: their sum is a soft "and" of the three.
 - Z1[i] = log-mean-exp over j of r_ij (a soft max), and the head a log-mean-exp over the cells
   (a soft "some pair"), a linear layer to 2 logits and softmax.
@@ -52,7 +52,7 @@ from torch import nn
 
 from .data import IMAGE
 from ..models.encoders import TextEncoder
-from ..models.trnet import TRNet
+from ..models.relation import relation_mlp, split_params
 
 
 @dataclass
@@ -172,9 +172,6 @@ class ShapeWorldTRNet(nn.Module):
             self.classify.weight.copy_(torch.tensor([[-1.0], [1.0]]))
             self.classify.bias.zero_()
 
-    # decoded parameters (..., P) -> the relation MLP's weights (..., out, in), by layer_shapes
-    split_params = TRNet.split_params
-
     def forward(self, images: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         b = len(images)
         x = torch.cat([images, self.coords.expand(b, -1, -1, -1)], 1)
@@ -190,9 +187,9 @@ class ShapeWorldTRNet(nn.Module):
         wr = self.decode_reference(roles[:, 1])
         m_s = torch.einsum('bnd,bd->bn', phi, ws[:, :-1]) + ws[:, -1:]
         m_r = torch.einsum('bnd,bd->bn', phi, wr[:, :-1]) + wr[:, -1:]
-        w = self.split_params(self.decoder(roles[:, 2]))  # (B, out, in) per layer
+        w = split_params(self.decoder(roles[:, 2]), self.layer_shapes)  # (B, out, in) per layer
         table = self.offset_table.expand(b, 1, -1, -1)  # (B, 1, (2g-1)^2, 2)
-        rel = TRNet.relation_mlp(w, table, None)[:, 0][:, self.offset_index]  # (B, N, N)
+        rel = relation_mlp(w, table, None)[:, 0][:, self.offset_index]  # (B, N, N)
         r = m_s[:, :, None] + m_r[:, None, :] + rel
         # a soft max over pairs, as a log-mean-exp: at the scale of r whatever the grid
         n = r.shape[1]

@@ -31,7 +31,7 @@ from ..data.datasets import DEFAULT_DATA, load_task, SPLITS
 from ..data.noise import add_noise, add_noise_options, NOISES, require_unseen_rows
 from ..models.checkpoints import load_checkpoint, Loaded
 from ..models.config import neighbour_offsets
-from ..models.encoders import shifted
+from ..models.relation import cell_pairs
 from ..models.trnet import TRNet
 
 PAIRS_SHOWN = 3
@@ -44,14 +44,12 @@ def pair_scores(model: TRNet, grid: torch.Tensor, tokens: torch.Tensor):
 
     For one map (1, H, W) and its instruction (1, L); attention is None for t-RNet. The forward
     keeps only Z1 = max_j r_ij and the attention averaged over all pairs; this evaluates the
-    paper's formulas with the model's own relations() for each pair:
+    paper's formulas on the pairs of models.relation.cell_pairs with the model's own
+    relations(), as its reference forward does:
     alpha_ij(k) ~ exp(h(k)^T A [phi(s_i); phi(s_j)]), r_ij = f_ij([phi(s_i); phi(s_j); l_ij]).
     """
-    _, h, w = grid.shape
-    radius = model.cfg.radius
-    phi = model.phi(grid)  # (1, H+2r, W+2r, k), the border off the map
-    phi_i = phi[:, radius:radius + h, radius:radius + w].flatten(1, 2)  # (1, N, k)
-    phi_j = torch.stack(shifted(phi, radius), 3).flatten(1, 2)  # (1, N, P, k)
+    # (1, N, k), (1, N, P, k), from the map embedded with its off-map border
+    phi_i, phi_j = cell_pairs(model.phi(grid), model.cfg.radius)
     r, attention = model.relations(phi_i, phi_j, model.text(tokens))
     return r[0], None if attention is None else attention[0]
 
