@@ -185,7 +185,7 @@ def test_t_uvfa_trains_without_distractors_on_a_task_that_has_them(tmp_path):
     data = generate(40, seed=3, mode='local')
     path, _ = train_supervised('pw', 't-uvfa', '', tmp_path, tc, train_data=data, progress=False)
     assert load_checkpoint(path).header['config']['distractor_kinds'] == 0
-    with pytest.raises(ValueError, match='t-UVFA has no distractor kinds'):
+    with pytest.raises(ValueError, match='t-uvfa has no distractor kinds'):
         train_supervised(
             'pw', 't-uvfa', '', tmp_path, replace(tc, distractors=2), train_data=data,
             progress=False,

@@ -26,7 +26,6 @@ import torch
 from .datasets import GroundingSet
 from .noise import free_cells, noise_words
 from ..core.text import PAD, tokenize, UNK, Vocabulary
-from ..models.encoders import distractor_kind_ids
 
 
 def _pairs(*pairs: tuple[str, str]) -> dict[str, str]:
@@ -242,16 +241,16 @@ def add_distractors(
     other than the goal (noise.free_cells, where the robustness study's unseen objects go too,
     which are other rows, held out), so the value maps stay true. `rng` alone draws
     everything: processes of one data-parallel run, given the same whole batch and generator,
-    agree.
+    agree. The model must have distractor rows (its Capabilities' distractor_rows).
     """
-    ids = np.array(distractor_kind_ids(model.cfg))
+    if not model.capabilities.distractor_rows:
+        raise ValueError(f'{type(model).__name__} has no distractor kinds')
+    ids = np.array(model.distractor_kinds())
     if most > len(ids):
         raise ValueError(
             f'{most} distractors need as many distractor kinds; the model has {len(ids)}'
         )
-    weight = model.phi.embed.weight
-    with torch.no_grad():
-        weight[ids] = torch.from_numpy(rng.standard_normal((len(ids), weight.shape[1]))).to(weight)
+    model.redraw_distractors(rng.standard_normal)
     grids = grids.clone()
     for grid, goal, k in zip(grids.numpy(), goals.numpy(), rng.integers(0, most + 1, len(grids))):
         cells = free_cells(grid, goal)

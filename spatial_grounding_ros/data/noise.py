@@ -35,7 +35,8 @@ from .datasets import GroundingSet
 from ..core.entities import EntityTable
 from ..core.text import tokenize, Vocabulary
 from ..models.config import ModelConfig
-from ..models.encoders import EntityEncoder, unseen_kind_ids
+from ..models.encoders import unseen_kind_ids
+from ..models.protocol import Capabilities
 
 NOISES = ('obs-noise', 'text-noise', 'unknown-words')
 MAX_K = ModelConfig.unseen_kinds  # the paper's 1..10; also the unseen kinds a model holds
@@ -179,12 +180,17 @@ def add_noise(
 
 
 def require_unseen_rows(model, name: str) -> None:
-    """Fail clearly when a model has no embedding rows for unseen kinds (t-UVFA)."""
-    phi = getattr(model, 'phi', None)
-    if not isinstance(phi, EntityEncoder) or phi.embed.num_embeddings <= phi.off_map + MAX_K:
+    """
+    Fail clearly when a model has no embedding rows for the MAX_K unseen kinds.
+
+    The model's Capabilities say whether its entity table has unseen rows at all (t-UVFA's has
+    none); one that has them must hold as many as obs-noise may place.
+    """
+    capabilities = getattr(model, 'capabilities', Capabilities())
+    if not capabilities.unseen_rows or len(model.unseen_kinds()) < MAX_K:
         raise ValueError(
             f'{name} has no embedding rows for unseen kinds, so it cannot be given unseen '
-            'objects (t-rnet-attn, t-rnet and t-cnn have them)'
+            f'objects (a model needs {MAX_K} of them)'
         )
 
 

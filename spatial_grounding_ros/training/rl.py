@@ -356,7 +356,9 @@ def train_rl(
     target_maps: dict[int, np.ndarray] = {}
     episodes, updates, log = 0, 0, []
     start = time.perf_counter()
-    warmup = int(cfg.episodes * cfg.attention_warmup) if getattr(model, 'attention', False) else 0
+    warmup = (
+        int(cfg.episodes * cfg.attention_warmup) if model.capabilities.relation_attention else 0
+    )
     while episodes < cfg.episodes:
         # as in supervised training: attention weights start at 0, so until they switch on
         # t-RNetAttn is exactly t-RNet and the 5-10x cheaper attention-free forward is used

@@ -7,11 +7,9 @@
 """
 Supervised training and evaluation, readable top to bottom.
 
-Supervised training (value-map MSE plus a goal-cell cross-entropy) and evaluation,
-readable top to bottom.
-
-Adam at the paper's learning rate; a validation split carved out of train (by world)
-selects the checkpoint; the test split is only ever evaluated.
+The loss is the value-map MSE plus a goal-cell cross-entropy, minimised by Adam at the paper's
+learning rate; a validation split carved out of train (by world) selects the checkpoint; the
+test split is only ever evaluated.
 """
 
 from __future__ import annotations
@@ -22,14 +20,14 @@ import time
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 from tqdm import tqdm
 
 from . import distributed
+from .epochs import Epochs, trim_padding
 from .options import check, option
 from ..core import tasks, world
 from ..core.text import Vocabulary
-from ..data.augment import add_distractors, insert_noise_words, noise_word_pools, with_mirrors
+from ..data.augment import with_mirrors
 from ..data.datasets import (
     GroundingSet,
     load_task,
@@ -41,7 +39,8 @@ from ..data.generator import generate, MODES
 from ..data.noise import MAX_K
 from ..models.checkpoints import save_checkpoint
 from ..models.config import ModelConfig
-from ..models.registry import build_model
+from ..models.protocol import Capabilities
+from ..models.registry import build_model, capabilities
 
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
@@ -123,9 +122,9 @@ class TrainConfig:
     def __post_init__(self):
         check(self)
 
-    def for_task(self, task: str) -> 'TrainConfig':
+    def for_task(self, task: tasks.Task | str) -> 'TrainConfig':
         """Return this config with every field left at None set to `task`'s value."""
-        settings = tasks.task(task)
+        settings = task if isinstance(task, tasks.Task) else tasks.task(task)
         return replace(
             self,
             **{
@@ -134,33 +133,6 @@ class TrainConfig:
                 if getattr(self, f.name) is None
             },
         )
-
-
-def encode(vocab: Vocabulary, data: GroundingSet) -> tuple[torch.Tensor, torch.Tensor]:
-    return torch.from_numpy(data.grids), torch.from_numpy(vocab.encode_batch(data.instructions))
-
-
-def batches(lengths: np.ndarray, batch_size: int, rng: np.random.Generator) -> list[np.ndarray]:
-    """
-    Return shuffled batches of similar instruction length.
-
-    Sorted by length within pools of 8 batches, so padding, which the per-pair attention
-    pays for, stays short.
-    """
-    order = rng.permutation(len(lengths))
-    pool = batch_size * 8
-    out = []
-    for i in range(0, len(order), pool):
-        chunk = order[i:i + pool]
-        chunk = chunk[np.argsort(lengths[chunk], kind='stable')]
-        out += [chunk[j:j + batch_size] for j in range(0, len(chunk), batch_size)]
-    return [out[i] for i in rng.permutation(len(out))]
-
-
-def _trim(tokens: torch.Tensor) -> torch.Tensor:
-    """Drop padding columns that no row of this batch uses."""
-    used = int((tokens != 0).any(0).nonzero().max()) + 1 if (tokens != 0).any() else 1
-    return tokens[:, :used]
 
 
 @torch.no_grad()
@@ -172,7 +144,7 @@ def predict_maps(
     grids = torch.from_numpy(np.asarray(grids, dtype=np.int64))
     tokens = torch.from_numpy(vocab.encode_batch(instructions))
     out = [
-        model(grids[i:i + batch_size], _trim(tokens[i:i + batch_size]))
+        model(grids[i:i + batch_size], trim_padding(tokens[i:i + batch_size]))
         for i in range(0, len(grids), batch_size)
     ]
     return torch.cat(out).numpy()
@@ -194,7 +166,7 @@ def evaluate_hit(model, vocab: Vocabulary, data: GroundingSet) -> float:
 
 
 def training_parts(
-    task: str, train: GroundingSet, val: GroundingSet, tc: TrainConfig, data_dir: str | Path
+    task: tasks.Task, train: GroundingSet, val: GroundingSet, tc: TrainConfig, data_dir: str | Path
 ) -> list[GroundingSet]:
     """
     Return what a task trains on, one GroundingSet per map size.
@@ -206,7 +178,7 @@ def training_parts(
     parts = [human]
     if tc.world_instructions:
         held_out = set(val.worlds)
-        worlds = pw_world_ids(data_dir, tasks.task(task).pw_modes)
+        worlds = pw_world_ids(data_dir, task.pw_modes)
         parts.append(load_world_instructions(data_dir, [w for w in worlds if w not in held_out]))
     if tc.synthetic:
         for n, (size, share) in enumerate(SYNTHETIC_SIZES):
@@ -216,7 +188,7 @@ def training_parts(
                     generate(
                         count,
                         seed=10_000 + 100 * tc.seed + n,
-                        mode=tasks.task(task).generator_mode,
+                        mode=task.generator_mode,
                         size=size,
                     )
                 )
@@ -224,26 +196,105 @@ def training_parts(
     by_size: dict[tuple, list[GroundingSet]] = {}
     for part in parts:
         by_size.setdefault(part.grids.shape[1:], []).append(part)
-    return [GroundingSet.concat(task, group) for group in by_size.values()]
+    return [GroundingSet.concat(task.name, group) for group in by_size.values()]
 
 
-def goal_loss(pred: torch.Tensor, goals: torch.Tensor, scale) -> torch.Tensor:
-    """
-    Cross-entropy of the goal cell over the map's cells, the values times `scale` as logits.
-
-    MSE alone barely penalises a peak one cell off (neighbouring true values differ by 10%), so the
-    argmax often lands beside the goal, or on the object named.
-    """
-    b, h, w = pred.shape
-    return F.cross_entropy(pred.reshape(b, h * w) * scale, goals[:, 0] * w + goals[:, 1])
-
-
-def generated_validation(task: str, seed: int, per_family: int = 40) -> GroundingSet | None:
+def generated_validation(
+    task: tasks.Task, seed: int, per_family: int = 40
+) -> GroundingSet | None:
     """Fresh generated worlds (never trained on) of every family the task trains on."""
-    mode = tasks.task(task).generator_mode
-    if mode is None:
+    if task.generator_mode is None:
         return None
-    return generate(per_family * len(MODES[mode]), seed=20_000 + seed, mode=mode)
+    return generate(
+        per_family * len(MODES[task.generator_mode]), seed=20_000 + seed, mode=task.generator_mode
+    )
+
+
+def task_training_config(
+    task: tasks.Task, model_name: str, supports: Capabilities, tc: TrainConfig
+) -> TrainConfig:
+    """
+    Return `tc` completed with the task's values for a model that `supports` so much.
+
+    A model without distractor rows trains without the task's distractors, and refuses them
+    when they are asked for.
+    """
+    if not supports.distractor_rows:  # its entity table has the kinds alone
+        if tc.distractors:
+            raise ValueError(
+                f'{model_name} has no distractor kinds; train it with --distractors 0'
+            )
+        tc = replace(tc, distractors=0)
+    tc = tc.for_task(task)
+    if tc.synthetic and task.generator_mode is None:
+        raise ValueError(
+            f'--synthetic adds generated PuddleWorld worlds; task {task.name} is not PuddleWorld'
+        )
+    return tc
+
+
+def model_config(
+    task: tasks.Task,
+    supports: Capabilities,
+    tc: TrainConfig,
+    data: GroundingSet,
+    vocab: Vocabulary,
+    model_options: dict,
+) -> ModelConfig:
+    """Return the config of the model trained: the task's model options, as far as it supports."""
+    model_options = {**({} if tc.paper_model else task.model), **model_options}
+    if tc.distractors:
+        model_options['distractor_kinds'] = tc.distractors
+    if not supports.far_relation:  # the far relation is a relation network's
+        model_options.pop('far', None)
+    return ModelConfig(
+        n_entities=len(data.entities),
+        vocab_size=len(vocab),
+        embed_dim=data.entities.embed_dim,
+        **model_options,
+    )
+
+
+def best_epoch(
+    epochs: Epochs,
+    bar,
+    vocab: Vocabulary,
+    val: GroundingSet,
+    val_generated: GroundingSet | None,
+) -> tuple[tuple, list[tuple]]:
+    """
+    Run every epoch of `bar`, validating each; return the best and the history.
+
+    The best is (score, state dict, epoch) by `select`: the second half's best validation
+    PQ plus generated-validation HIT (ties: MSE), or the lowest validation MSE of all epochs.
+    The history holds (training loss, validation MSE, PQ, generated HIT) per epoch.
+    """
+    model, tc = epochs.model, epochs.tc
+    best = ((float('inf'),), None, -1)
+    history = []
+    for epoch in bar:
+        loss = epochs.run(epoch)
+        val_metrics = evaluate(model, vocab, val)
+        val_hit = evaluate_hit(model, vocab, val_generated) if val_generated is not None else 0.0
+        history.append((loss, val_metrics['mse'], val_metrics['pq'], val_hit))
+        score = (
+            (-(val_metrics['pq'] + val_hit), val_metrics['mse'])
+            if tc.select == 'pq'
+            else (val_metrics['mse'],)
+        )
+        # PQ of a few hundred maps swings while the maps are still rough (PW: validation PQ
+        # 0.937 at epoch 5 of 40, MSE 0.373), so PQ only chooses among the second half
+        if score < best[0] and (tc.select != 'pq' or epoch >= tc.epochs // 2):
+            best = (score, {k: v.clone() for k, v in model.state_dict().items()}, epoch)
+        bar.set_postfix(
+            train=f'{loss:.3f}',
+            val_mse=f'{val_metrics["mse"]:.3f}',
+            val_pq=f'{val_metrics["pq"]:.3f}',
+            gen_hit=f'{val_hit:.3f}',
+            best=best[2],
+            scale=f'{epochs.goal_log_scale.exp().item():.1f}',
+        )
+    return best, history
 
 
 def train_supervised(
@@ -257,75 +308,26 @@ def train_supervised(
     **model_options,
 ) -> tuple[Path, dict]:
     """
-    Train `model_name` on `task` and keep the epoch with the best validation score.
+    Train `model_name` on `task`, keep the epoch with the best validation score.
 
-    Train `model_name` on `task`, keep the epoch with the best validation score, write
-    `out/<task>_<model>.pt`; returns its path and a summary.
-
-    Under `torchrun --nproc_per_node N` each process runs a share of every batch (distributed.py);
-    only the first prints progress and writes the checkpoint.
+    Writes `out/<task>_<model>.pt`; returns its path and a summary. Under `torchrun
+    --nproc_per_node N` each process runs a share of every batch (distributed.py); only the
+    first prints progress and writes the checkpoint.
     """
-    if model_name == 't-uvfa':  # its entity table has the kinds alone: no distractor rows
-        if tc.distractors:
-            raise ValueError('t-UVFA has no distractor kinds; train it with --distractors 0')
-        tc = replace(tc, distractors=0)
-    tc = tc.for_task(task)
-    if tc.synthetic and tasks.task(task).generator_mode is None:
-        raise ValueError(
-            f'--synthetic adds generated PuddleWorld worlds; task {task} is not PuddleWorld'
-        )
-    model_options = {**({} if tc.paper_model else tasks.task(task).model), **model_options}
-    if tc.distractors:
-        model_options['distractor_kinds'] = tc.distractors
-    if model_name not in ('t-rnet-attn', 't-rnet'):  # the far relation is a relation network's
-        model_options.pop('far', None)
+    settings, supports = tasks.task(task), capabilities(model_name)
+    tc = task_training_config(settings, model_name, supports, tc)
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = train_data if train_data is not None else load_task(task, 'train', data_dir)
     train, val = split_by_world(data, tc.val_fraction, tc.seed)
-    parts = training_parts(task, train, val, tc, data_dir)
-    val_generated = generated_validation(task, tc.seed) if tc.synthetic else None
+    parts = training_parts(settings, train, val, tc, data_dir)
+    val_generated = generated_validation(settings, tc.seed) if tc.synthetic else None
     # from everything trained on: generated phrasing and the mirrors' swapped direction words
     vocab = Vocabulary.build(list(data.instructions) + [t for p in parts for t in p.instructions])
-    cfg = ModelConfig(
-        n_entities=len(data.entities),
-        vocab_size=len(vocab),
-        embed_dim=data.entities.embed_dim,
-        **model_options,
-    )
+    cfg = model_config(settings, supports, tc, data, vocab, model_options)
     model = build_model(model_name, cfg)
     processes = distributed.start()
-    # log of the goal logits' temperature; learned, it lets the cross-entropy ask for the right
-    # argmax without pulling the values away from the MSE's (it is not part of the model)
-    goal_log_scale = torch.tensor(float(np.log(tc.goal_scale)), requires_grad=tc.learn_goal_scale)
-    opt = torch.optim.Adam(
-        [*model.parameters()] + ([goal_log_scale] if tc.learn_goal_scale else []), lr=tc.lr
-    )
-    encoded, word_pools = [], []
-    for part in parts:
-        grids, tokens = encode(vocab, part)
-        encoded.append(
-            (
-                grids,
-                tokens,
-                torch.from_numpy(part.values),
-                torch.from_numpy(part.goals),
-                (tokens != 0).sum(1).numpy(),
-            )
-        )
-        word_pools.append(noise_word_pools(part, vocab) if tc.text_noise else None)
-    steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
-    warmup = int(tc.epochs * tc.attention_warmup) if getattr(model, 'attention', False) else 0
-    # the model itself in one process; the warm-up leaves the attention weights unused
-    trained = distributed.wrap(model, processes, find_unused=bool(warmup))
-    sched = torch.optim.lr_scheduler.CosineAnnealingLR(
-        opt, T_max=(warmup or tc.epochs) * steps_per_epoch, eta_min=tc.lr_final
-    )
-    rng = np.random.default_rng(tc.seed)
-    distractor_rng = np.random.default_rng([tc.seed, 1])  # the same draws in every process
-    text_noise_rng = np.random.default_rng([tc.seed, 2])
-    best = ((float('inf'),), None, -1)
-    history = []
+    epochs = Epochs(model, parts, vocab, tc, processes)
     start = time.perf_counter()
     bar = tqdm(
         range(tc.epochs),
@@ -333,71 +335,7 @@ def train_supervised(
         disable=not (progress and processes.main),
         unit='ep',
     )
-    for epoch in bar:
-        model.train()
-        if warmup:  # uniform attention (attn weights still 0) == t-RNet, 5-10x cheaper a step
-            model.attention_on = epoch >= warmup
-            if epoch == warmup:  # attention starts learning: give it a full schedule of its own
-                for group in opt.param_groups:
-                    group['lr'] = tc.lr
-                sched = torch.optim.lr_scheduler.CosineAnnealingLR(
-                    opt, T_max=(tc.epochs - warmup) * steps_per_epoch, eta_min=tc.lr_final
-                )
-        plan = [
-            (p, idx)
-            for p, (*_, lengths) in enumerate(encoded)
-            for idx in batches(lengths, tc.batch_size, rng)
-        ]
-        losses = []
-        for p in rng.permutation(len(plan)):
-            part, idx = plan[p]
-            grids, tokens, values, goals, _ = encoded[part]
-            batch = torch.from_numpy(idx)
-            batch_grids = grids[batch]
-            if tc.distractors:  # drawn for the whole batch: every process draws the same
-                batch_grids = add_distractors(
-                    model, batch_grids, goals[batch], tc.distractors, distractor_rng
-                )
-            batch_tokens = tokens[batch]
-            if tc.text_noise:  # likewise
-                batch_tokens = insert_noise_words(
-                    batch_tokens, [word_pools[part][i] for i in idx], tc.text_noise, text_noise_rng
-                )
-            # this process's share (weight 1.0: the whole batch, alone)
-            share, weight = distributed.shard(np.arange(len(idx)), processes)
-            share = torch.from_numpy(share)
-            idx = batch[share]
-            pred = trained(batch_grids[share], _trim(batch_tokens[share]))
-            loss = torch.mean((pred - values[idx]) ** 2)
-            if tc.goal_weight:
-                loss = loss + tc.goal_weight * goal_loss(pred, goals[idx], goal_log_scale.exp())
-            opt.zero_grad()
-            (loss * weight).backward()
-            distributed.average_gradients([goal_log_scale], processes)
-            opt.step()
-            sched.step()
-            losses.append(loss.item() * weight)
-        losses = distributed.batch_losses(losses, processes)
-        val_metrics = evaluate(model, vocab, val)
-        val_hit = evaluate_hit(model, vocab, val_generated) if val_generated is not None else 0.0
-        history.append((float(np.mean(losses)), val_metrics['mse'], val_metrics['pq'], val_hit))
-        score = (
-            (-(val_metrics['pq'] + val_hit), val_metrics['mse'])
-            if tc.select == 'pq'
-            else (val_metrics['mse'],)
-        )
-        # PQ of a few hundred maps swings while the maps are still rough (PW: validation PQ
-        # 0.937 at epoch 5 of 40, MSE 0.373), so PQ only chooses among the second half
-        if score < best[0] and (tc.select != 'pq' or epoch >= tc.epochs // 2):
-            best = (score, {k: v.clone() for k, v in model.state_dict().items()}, epoch)
-        bar.set_postfix(
-            train=f'{np.mean(losses):.3f}',
-            val_mse=f'{val_metrics["mse"]:.3f}',
-            val_pq=f'{val_metrics["pq"]:.3f}',
-            gen_hit=f'{val_hit:.3f}',
-            best=best[2],
-            scale=f'{goal_log_scale.exp().item():.1f}',
-        )
+    best, history = best_epoch(epochs, bar, vocab, val, val_generated)
     train_seconds = time.perf_counter() - start
     model.load_state_dict(best[1])
     val_metrics = evaluate(model, vocab, val)
@@ -429,7 +367,7 @@ def train_supervised(
             seed=tc.seed,
             best_epoch=best[2],
             val_metrics=val_metrics,
-            goal_scale=round(float(goal_log_scale.detach().exp()), 3),
+            goal_scale=round(float(epochs.goal_log_scale.detach().exp()), 3),
             train_seconds=summary['train_seconds'],
             train_config=vars(tc).copy(),
             loss_history=[[round(x, 5) for x in row] for row in history],
