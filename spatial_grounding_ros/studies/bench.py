@@ -195,7 +195,7 @@ def training_step(grounder: Grounder, batch: int, budget_s: float) -> dict:
         opt.step()
 
     result = {'batch': batch, 'map': '10x10', 'model': loaded.name}
-    with_attention = getattr(model, 'attention', False)  # t-RNetAttn; the others have none
+    with_attention = model.capabilities.relation_attention  # t-RNetAttn; the others have none
     for name in ('attention_off', 'attention_on') if with_attention else ('attention_off',):
         if with_attention:
             model.attention_on = name == 'attention_on'
