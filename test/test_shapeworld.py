@@ -243,9 +243,9 @@ def test_train_and_eval_commands(tmp_path, capsys):
     noisy = json.loads(capsys.readouterr().out)
     assert (noisy['image_noise'], noisy['text_noise'], noisy['n']) == (2, 3, 500)
     # a ShapeWorld checkpoint is not a grid model, and the other way round: one clear line
-    with pytest.raises(ValueError, match='ShapeWorld image classifier'):
+    with pytest.raises(ValueError, match='holds a ShapeWorld image classifier'):
         load_checkpoint(path)
-    with pytest.raises(ValueError, match='not a ShapeWorld checkpoint'):
+    with pytest.raises(ValueError, match='not a ShapeWorld image classifier'):
         load('pw_t-rnet-attn')
     assert cli.main(argv[:-1] + ['--image-noise', '-1']) == 2
     assert cli.main(['train', '--task', 'shapeworld', '--model', 't-cnn']) == 2

@@ -5,11 +5,14 @@
 # https://opensource.org/licenses/MIT.
 
 """
-Checkpoints: `torch.save` of {header, state_dict}.
+Checkpoints: `torch.save` of {header, state_dict}, one writer and one reader for every model.
 
-The header is plain data (model name, hyper-parameters, vocabulary, entity table, training data,
-metrics), so loading works with `weights_only=True`, and any mismatch is a clear error at load
-time, not a crash later.
+The header is plain data (model name, hyper-parameters, vocabulary, training data, metrics, and
+a grid model's entity table), so loading works with `weights_only=True`, and any mismatch is a
+clear error at load time, not a crash later. Two families share the format: the value-map
+models of the grid tasks (`load_checkpoint`, here) and the ShapeWorld image classifiers, whose
+header says task 'shapeworld' (their loader, shapeworld/training.py, needs their own models).
+`read_checkpoint` refuses a checkpoint of the other family, so neither loader sees one.
 """
 
 from __future__ import annotations
@@ -28,6 +31,12 @@ from ..core.text import Vocabulary
 
 FORMAT = 'spatial_grounding_ros/1'
 PACKAGED_DIR = Path(__file__).resolve().parents[1] / 'checkpoints'  # the package's own
+SHAPEWORLD = 'shapeworld'  # the header's task of a ShapeWorld image classifier
+# what each family is, in the error that refuses one for the other
+FAMILIES = {
+    'grid': 'a value-map model (spatial-grounding eval)',
+    SHAPEWORLD: 'a ShapeWorld image classifier (spatial-grounding shapeworld-eval)',
+}
 
 
 @dataclass
@@ -42,6 +51,28 @@ class Loaded:
         return self.header['model']
 
 
+def write_checkpoint(
+    path: str | Path, model_name: str, model: nn.Module, config: dict, vocab: Vocabulary, **info
+) -> Path:
+    """
+    Write the package's checkpoint format: every checkpoint, of any model, is written here.
+
+    `config` is the model's hyper-parameters as plain data (its `to_dict()`); `info` (task,
+    entity table, training data, metrics, ...) goes into the header beside them.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    header = {
+        'format': FORMAT,
+        'model': model_name,
+        'config': config,
+        'vocabulary': list(vocab.words),
+        **info,
+    }
+    torch.save({'header': header, 'state_dict': model.state_dict()}, path)
+    return path
+
+
 def save_checkpoint(
     path: str | Path,
     model_name: str,
@@ -51,19 +82,10 @@ def save_checkpoint(
     entities: EntityTable,
     **info,
 ) -> Path:
-    """Write a checkpoint; `info` (task, training data, metrics, ...) goes into the header."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    header = {
-        'format': FORMAT,
-        'model': model_name,
-        'config': cfg.to_dict(),
-        'vocabulary': list(vocab.words),
-        'entities': entities.to_dict(),
-        **info,
-    }
-    torch.save({'header': header, 'state_dict': model.state_dict()}, path)
-    return path
+    """Write a grid model's checkpoint: its entity table goes into the header beside `info`."""
+    return write_checkpoint(
+        path, model_name, model, cfg.to_dict(), vocab, entities=entities.to_dict(), **info
+    )
 
 
 def resolve_checkpoint(name: str | Path) -> Path:
@@ -84,8 +106,20 @@ def resolve_checkpoint(name: str | Path) -> Path:
     )
 
 
-def read_checkpoint(path: Path) -> tuple[dict, dict]:
-    """(header, state_dict) of a checkpoint file of this package's format, any task."""
+def family(header: dict) -> str:
+    """Return the family of a checkpoint's header: 'shapeworld' or 'grid' (FAMILIES)."""
+    return SHAPEWORLD if header.get('task') == SHAPEWORLD else 'grid'
+
+
+def read_checkpoint(name: str | Path, expect_family: str) -> tuple[Path, dict, dict]:
+    """
+    Return (path, header, state_dict) of a checkpoint of `expect_family` ('grid', 'shapeworld').
+
+    `name` is a path or a packaged name (resolve_checkpoint). A file torch cannot read, one
+    without a header, another format, or a checkpoint of the other family is one ValueError
+    line naming the file.
+    """
+    path = resolve_checkpoint(name)
     try:
         blob = torch.load(path, map_location='cpu', weights_only=True)
     except Exception as exc:  # torch raises many types on a corrupt or foreign file
@@ -101,16 +135,22 @@ def read_checkpoint(path: Path) -> tuple[dict, dict]:
         raise ValueError(
             f'{path}: checkpoint format {header.get("format")!r}, expected {FORMAT!r}'
         )
-    return header, blob['state_dict']
+    found = family(header)
+    if found != expect_family:
+        raise ValueError(f'{path}: holds {FAMILIES[found]}, not {FAMILIES[expect_family]}')
+    return path, header, blob['state_dict']
 
 
 def load_checkpoint(
     name: str | Path, expect_model: str | None = None, expect_entities: EntityTable | None = None
 ) -> Loaded:
-    path = resolve_checkpoint(name)
-    header, state_dict = read_checkpoint(path)
-    if header.get('task') == 'shapeworld':
-        raise ValueError(f'{path}: a ShapeWorld image classifier; use it with --task shapeworld')
+    """
+    Load a grid model (value maps) with its vocabulary, entity table and header.
+
+    `expect_model` and `expect_entities` refuse a checkpoint of another model or entity table.
+    A header written before models had unseen-kind rows gets them (EntityEncoder).
+    """
+    path, header, state_dict = read_checkpoint(name, 'grid')
     name_ = header.get('model')
     if name_ not in MODELS:
         raise ValueError(f'{path}: unknown model {name_!r} in checkpoint')

@@ -30,9 +30,9 @@ from tqdm import tqdm
 from .data import converse, image_noise, load_split, ShapeWorldSet, text_noise
 from .models import build_model, MODELS, ShapeWorldConfig
 from ..core.text import Vocabulary
-from ..models.checkpoints import FORMAT, read_checkpoint, resolve_checkpoint
+from ..models.checkpoints import read_checkpoint, SHAPEWORLD, write_checkpoint
 
-TASK = 'shapeworld'
+TASK = SHAPEWORLD  # the checkpoints' task, which tells them from the grid models'
 # epochs over the training split after the curriculum's warm-up (TrainConfig), per model
 EPOCHS = {'t-rnet-attn': 3, 't-vgg': 3}
 PAPER_ACC = {'t-vgg': 0.71, 't-rnet-attn': 0.72}  # the paper's Table 1
@@ -101,26 +101,18 @@ def accuracy(model, vocab: Vocabulary, data: ShapeWorldSet, image_k=0, text_k=0,
 
 
 def save(path: Path, name: str, model, cfg: ShapeWorldConfig, vocab: Vocabulary, **info) -> Path:
-    """Write a checkpoint in the package's format (checkpoints.py), task ShapeWorld."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    header = {
-        'format': FORMAT,
-        'task': TASK,
-        'model': name,
-        'config': cfg.to_dict(),
-        'vocabulary': list(vocab.words),
-        **info,
-    }
-    torch.save({'header': header, 'state_dict': model.state_dict()}, path)
-    return path
+    """Write a ShapeWorld checkpoint: the package's format (checkpoints.py), task 'shapeworld'."""
+    return write_checkpoint(path, name, model, cfg.to_dict(), vocab, task=TASK, **info)
 
 
 def load(name: str | Path):
-    """(model, vocabulary, header) of a ShapeWorld checkpoint, a path or a packaged name."""
-    path = resolve_checkpoint(name)
-    header, state = read_checkpoint(path)
-    if header.get('task') != TASK:
-        raise ValueError(f'{path}: not a ShapeWorld checkpoint (task {header.get("task")!r})')
+    """
+    Return (model, vocabulary, header) of a ShapeWorld checkpoint, a path or a packaged name.
+
+    A grid model's checkpoint, or weights that do not fit the model the header names, is one
+    ValueError line.
+    """
+    path, header, state = read_checkpoint(name, TASK)
     vocab = Vocabulary(header['vocabulary'][2:])
     try:
         cfg = ShapeWorldConfig.from_dict(header['config'])
