@@ -40,7 +40,7 @@ def random_model(name: str, vocab_size: int, seed: int, **config) -> torch.nn.Mo
     """Build a seeded model whose attention differs by pair and word (built, it is uniform)."""
     torch.manual_seed(seed)
     model = build_model(name, ModelConfig(vocab_size=vocab_size, **config)).eval()
-    if name == 't-rnet-attn':
+    if model.capabilities.relation_attention:
         with torch.no_grad():
             model.attn.weight.normal_()
     return model

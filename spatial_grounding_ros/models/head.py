@@ -53,8 +53,9 @@ class OutputHead(nn.Module):
     3, 6, 12, 6, 3 channels), which produced the t-CNN numbers the paper compares against:
     its 11x11 receptive field lets a goal's value spread over a 10x10 map. We use it at
     8, 16, 32, 16, 8 channels: on PW local (t-RNet, 100 epochs) test MSE 0.249 -> 0.190 and
-    PQ 0.881 -> 0.906, at +3 ms on a 128x128 map. No final ReLU: true values go negative (puddles,
-    down to about -3.3), so a ReLU would clip those cells to 0, an error no training removes.
+    PQ 0.881 -> 0.906, for a few milliseconds more on a large map (docs/benchmarks.md). No final
+    ReLU: true values go negative (puddles, down to about -3.3), so a ReLU would clip those
+    cells to 0, an error no training removes.
 
     `axial`: the second layer also reads AxialViews of the first layer's channels, so the
     head can compare what lies anywhere along a row or column, not only within 6 cells.
@@ -165,9 +166,9 @@ class OutputHead(nn.Module):
         """
         last = len(self.convs) if last is None else last
         if layout is None:
-            # channels-last is oneDNN's fast layout on CPU for batches and large maps (one
-            # thread: 2.3x on a 512x512 map, 1.6x on a training batch of 24x24 maps); one map
-            # of up to 96x96 runs faster in the plain layout. The bench times both.
+            # channels-last is oneDNN's fast layout on CPU for batches and large maps; one map
+            # of up to 96x96 runs faster in the plain layout (docs/benchmarks.md). The bench
+            # times both.
             big = x.shape[0] > 1 or x.shape[2] * x.shape[3] > 96 * 96
             layout = torch.channels_last if big else torch.contiguous_format
         x = x.contiguous(memory_format=layout)

@@ -122,7 +122,7 @@ class Epochs:
     def run(self, epoch: int) -> float:
         """Train epoch `epoch` (from 0); return its mean training loss over all processes."""
         self.model.train()
-        if self.warmup:  # uniform attention (attn weights still 0) == t-RNet, 5-10x cheaper
+        if self.warmup:  # uniform attention (attn weights still 0) == t-RNet, much cheaper
             self.model.attention_on = epoch >= self.warmup
             if epoch == self.warmup:  # attention starts learning: a full schedule of its own
                 for group in self.opt.param_groups:
