@@ -24,17 +24,11 @@ from .data.datasets import DEFAULT_DATA, SPLITS
 
 
 def cmd_train(args) -> int:
-    from .shapeworld import training as shapeworld_training
     from .training import distributed
     from .training.options import given_options
     from .training.supervised import train_supervised, TrainConfig
 
-    given = given_options(TrainConfig, args)  # the rest: the config's and the task's defaults
-    if args.task == shapeworld_training.TASK:
-        if distributed.world_size() > 1:  # N copies would each train and write the same file
-            raise ValueError('--task shapeworld trains in one process, not under torchrun')
-        return shapeworld_training.cmd_train(args, given)
-    tc = TrainConfig(**given)
+    tc = TrainConfig(**given_options(TrainConfig, args))  # the rest: the task's values
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     if distributed.is_main_process():  # under torchrun, one summary, not one per process
         print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
@@ -45,13 +39,7 @@ def cmd_eval(args) -> int:
     from .data.datasets import load_task
     from .data.noise import add_noise, NOISES, require_unseen_rows
     from .models.checkpoints import load_checkpoint
-    from .shapeworld import training as shapeworld_training
     from .training.supervised import evaluate
-
-    if args.task == shapeworld_training.TASK or args.image_noise:
-        return shapeworld_training.cmd_eval(args)
-    if args.cache is not None:
-        raise ValueError('--cache is for --task shapeworld')
 
     data = load_task(args.task, args.split, args.data)
     loaded = load_checkpoint(args.checkpoint, expect_entities=data.entities)
@@ -139,13 +127,8 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     from .data.noise import add_noise_options
     from .models.registry import MODELS
-    from .shapeworld import training as shapeworld_training
-    from .shapeworld.models import MODELS as SHAPEWORLD_MODELS
     from .training.options import add_options, ranged
     from .training.supervised import TrainConfig
-
-    tasks = [*TASKS, shapeworld_training.TASK]
-    models = [*MODELS, *(m for m in SHAPEWORLD_MODELS if m not in MODELS)]
 
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
@@ -154,11 +137,10 @@ def build_parser() -> argparse.ArgumentParser:
         'train',
         help="supervised training on a task's train split",
         description="Supervised training on a task's train split. An option not given takes "
-        "the task's value (tasks.py); --task shapeworld takes its own defaults "
-        '(shapeworld_training.TrainConfig: batch size 32, one thread).',
+        "the task's value (tasks.py). ShapeWorld has its own: shapeworld-train.",
     )
-    t.add_argument('--task', required=True, choices=tasks)
-    t.add_argument('--model', required=True, choices=models)
+    t.add_argument('--task', required=True, choices=list(TASKS))
+    t.add_argument('--model', required=True, choices=list(MODELS))
     t.add_argument('--data', default=DEFAULT_DATA)
     t.add_argument('--out', default='out')
     add_options(t, TrainConfig, unset=True)
@@ -166,13 +148,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     e = sub.add_parser('eval', help='evaluate a checkpoint on a split')
     e.add_argument('--checkpoint', required=True)
-    e.add_argument('--task', required=True, choices=tasks)
+    e.add_argument('--task', required=True, choices=list(TASKS))
     e.add_argument('--split', default='test', choices=SPLITS)
     e.add_argument('--data', default=DEFAULT_DATA)
     e.add_argument('--json', action='store_true', help='print exactly one JSON object')
     add_noise_options(e)
     e.set_defaults(func=cmd_eval)
-    shapeworld_training.add_cli_options(t, e)
 
     r = sub.add_parser('reproduce', help='train and evaluate the value-map table')
     r.add_argument('--data', default=DEFAULT_DATA)
@@ -197,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
         '--ablation',
         action='store_true',
         help='only the clear-references ablation: t-RNet on pw, each change of the '
-        'recipe off in turn (results/ablation.*, about 35 minutes)',
+        'recipe off in turn, one training run each (results/ablation.*)',
     )
     r.set_defaults(func=cmd_reproduce)
 
@@ -257,18 +238,18 @@ def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, bags, the suite, robustness, explain, and the closed-loop demo, which needs rclpy
-    (without it, every other subcommand still works).
+    bench, bags, the suite, ShapeWorld's, robustness, explain, and the closed-loop demo, which
+    needs rclpy (without it, every other subcommand still works).
     """
     from .data import bags
-    from .shapeworld import training as shapeworld_training
+    from .shapeworld import commands as shapeworld
     from .studies import bench, explain, robustness, suite
 
     found = [
         bench.register_cli,
         bags.register_cli,
         suite.register_cli,
-        shapeworld_training.register_cli,
+        shapeworld.register_cli,
         robustness.register_cli,
         explain.register_cli,
     ]

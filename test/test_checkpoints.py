@@ -114,6 +114,12 @@ def assert_one_line_error(*argv, needle):
     assert line.startswith('spatial-grounding: error: ') and needle in line
 
 
+def test_shapeworld_eval_refuses_a_grid_checkpoint_in_one_line():
+    assert_one_line_error(
+        'shapeworld-eval', '--checkpoint', 'pw_t-rnet-attn', needle='holds a value-map model'
+    )
+
+
 def test_eval_refuses_a_shapeworld_checkpoint_in_one_line(data_dir):
     assert_one_line_error(
         'eval', '--checkpoint', 'shapeworld_t-vgg', '--task', 'pw', '--data', str(data_dir),

@@ -204,8 +204,52 @@ def test_train_options_are_the_config_fields():
 
 
 def test_shapeworld_train_refuses_the_grid_options():
-    r = run('train', '--task', 'shapeworld', '--model', 't-vgg', '--synthetic', '10')
-    assert_one_line_error(r, '--synthetic: not an option of --task shapeworld')
+    r = run('shapeworld-train', '--model', 't-vgg', '--synthetic', '10')
+    assert_one_line_error(r, 'unrecognized arguments: --synthetic 10')
+    # ShapeWorld has its own subcommands: the grid commands do not know the task
+    r = run('train', '--task', 'shapeworld', '--model', 't-vgg')
+    assert_one_line_error(r, "argument --task: invalid choice: 'shapeworld'")
+
+
+def test_shapeworld_options_are_the_config_fields():
+    """`shapeworld-train` has one option per ShapeWorld TrainConfig field, its default and help."""
+    from dataclasses import fields
+
+    from spatial_grounding_ros.cli import build_parser
+    from spatial_grounding_ros.shapeworld.training import TrainConfig
+    from spatial_grounding_ros.training.options import from_options
+
+    base = ['shapeworld-train', '--model', 't-rnet-attn']
+    parsed = vars(build_parser().parse_args(base))
+    assert {f.name for f in fields(TrainConfig)} <= set(parsed), 'every field is an option'
+    assert from_options(TrainConfig, build_parser().parse_args(base)) == TrainConfig()
+    args = build_parser().parse_args(
+        base + ['--warmup-size', '500', '--max-minutes', '1.5', '--no-mirror', '--epochs', '2']
+    )
+    assert from_options(TrainConfig, args) == TrainConfig(
+        warmup_size=500, max_minutes=1.5, mirror=False, epochs=2
+    )
+    assert from_options(TrainConfig, build_parser().parse_args(
+        base + ['--max-minutes', '0', '--warmup-size', '0']
+    )) == TrainConfig(max_minutes=0.0, warmup_size=0)  # no time limit, no warm-up
+    assert all(f.metadata['help'] for f in fields(TrainConfig))
+    with pytest.raises(ValueError, match='warmup_absent must be 0..1, got 2'):
+        TrainConfig(warmup_absent=2)
+
+
+@pytest.mark.parametrize(
+    'option, value, needle',
+    [
+        ('--warmup-size', '-1', 'argument --warmup-size: must be at least 0, got -1'),
+        ('--max-minutes', '-5', 'argument --max-minutes: must be at least 0, got -5'),
+        ('--max-minutes', 'soon', "argument --max-minutes: invalid float value: 'soon'"),
+        ('--val-fraction', '1', 'argument --val-fraction: must be 0.01..0.9, got 1.0'),
+    ],
+)
+def test_shapeworld_train_refuses_an_option_out_of_its_range(option, value, needle):
+    """Each range is declared once, in ShapeWorld's TrainConfig: refused before any work."""
+    r = run('shapeworld-train', '--model', 't-vgg', option, value)
+    assert_one_line_error(r, 'spatial-grounding shapeworld-train: error:', needle)
 
 
 def test_rl_options_are_the_config_fields():

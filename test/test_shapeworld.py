@@ -233,7 +233,7 @@ def test_train_and_eval_commands(tmp_path, capsys):
     assert path.name == 'shapeworld_t-rnet-attn.pt' and summary['val_examples'] == 4
     # one warm-up epoch over 20 colour-named statements, one over the 36 training examples
     assert summary['epochs'] == 2 and summary['train_steps'] == 2 + 3
-    argv = ['eval', '--checkpoint', str(path), '--task', 'shapeworld', '--split', 'test',
+    argv = ['shapeworld-eval', '--checkpoint', str(path), '--split', 'test',
             '--cache', str(tmp_path), '--json']
     assert cli.main(argv) == 0
     clean = json.loads(capsys.readouterr().out)
@@ -247,6 +247,36 @@ def test_train_and_eval_commands(tmp_path, capsys):
         load_checkpoint(path)
     with pytest.raises(ValueError, match='not a ShapeWorld image classifier'):
         load('pw_t-rnet-attn')
-    assert cli.main(argv[:-1] + ['--image-noise', '-1']) == 2
-    assert cli.main(['train', '--task', 'shapeworld', '--model', 't-cnn']) == 2
-    assert 'no model' in capsys.readouterr().err
+    # usage mistakes: argparse's one line and exit status 2
+    for mistake in (['--image-noise', '-1'], ['--split', 'dev']):
+        with pytest.raises(SystemExit) as stop:
+            cli.main(argv[:-1] + mistake)
+        assert stop.value.code == 2
+    with pytest.raises(SystemExit) as stop:
+        cli.main(['shapeworld-train', '--model', 't-cnn'])
+    assert stop.value.code == 2 and "invalid choice: 't-cnn'" in capsys.readouterr().err
+
+
+def test_train_command_sets_every_config_field(tmp_path, capsys):
+    """`shapeworld-train` options reach the run: the header's train_config holds them."""
+    argv = ['shapeworld-train', '--model', 't-vgg', '--out', str(tmp_path), '--cache',
+            str(tmp_path), '--epochs', '1', '--train-size', '40', '--warmup-size', '20',
+            '--warmup-epochs', '1', '--batch-size', '16', '--max-minutes', '0', '--seed', '3']
+    assert cli.main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary['checkpoint'] == str(tmp_path / 'shapeworld_t-vgg.pt')
+    assert summary['epochs'] == 2 and not summary['stopped_at_time_limit']
+    _, _, header = load(summary['checkpoint'])
+    config = header['train_config']
+    assert (config['warmup_size'], config['max_minutes'], config['seed']) == (20, 0.0, 3)
+    assert config == {**vars(TrainConfig(
+        epochs=1, train_size=40, warmup_size=20, warmup_epochs=1, batch_size=16, max_minutes=0,
+        seed=3,
+    ))}
+
+
+def test_train_command_refuses_torchrun(monkeypatch, capsys):
+    """Refuse shapeworld-train under torchrun: each copy would train and write the same file."""
+    monkeypatch.setenv('WORLD_SIZE', '2')
+    assert cli.main(['shapeworld-train', '--model', 't-vgg']) == 2
+    assert 'not under torchrun' in capsys.readouterr().err

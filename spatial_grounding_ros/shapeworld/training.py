@@ -5,7 +5,7 @@
 # https://opensource.org/licenses/MIT.
 
 """
-ShapeWorld training, evaluation, checkpoints, commands and the reproduction, top to bottom.
+ShapeWorld training, evaluation and checkpoints; commands.py makes the subcommands of them.
 
 Adam at the paper's learning rate with a cosine decay, cross-entropy (the softmax of the paper's
 classification loss), a validation split carved out of train selects the epoch; the test split
@@ -16,10 +16,8 @@ is another correctly labelled one.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
-import json
+from dataclasses import asdict, dataclass
 from pathlib import Path
-import platform
 import time
 
 import numpy as np
@@ -31,43 +29,60 @@ from .data import converse, image_noise, load_split, ShapeWorldSet, text_noise
 from .models import build_model, MODELS, ShapeWorldConfig
 from ..core.text import Vocabulary
 from ..models.checkpoints import read_checkpoint, SHAPEWORLD, write_checkpoint
+from ..training.options import check, option
 
 TASK = SHAPEWORLD  # the checkpoints' task, which tells them from the grid models'
 # epochs over the training split after the curriculum's warm-up (TrainConfig), per model
 EPOCHS = {'t-rnet-attn': 3, 't-vgg': 3}
-PAPER_ACC = {'t-vgg': 0.71, 't-rnet-attn': 0.72}  # the paper's Table 1
-NOISE_KS = (0, 1, 2, 5, 10)  # the noise study's k, as the paper's figures
 SWAP_LEFT_RIGHT = {'left': 'right', 'right': 'left'}
 WARMUP_SEED = 2  # the warm-up set is drawn apart from the training split (seed 0)
 
 
 @dataclass
 class TrainConfig:
-    """Training hyper-parameters (epochs None: the model's EPOCHS)."""
+    """
+    Training hyper-parameters, each declared once: `shapeworld-train` makes its options of them.
 
-    epochs: int | None = None
-    batch_size: int = 32  # more updates an epoch: the task has a long plateau at chance
-    lr: float = 1e-3  # the paper's
-    lr_final: float = 1e-4  # cosine decay to this
-    val_fraction: float = 0.1  # of the training split
-    mirror: bool = True  # mirror a random half of each batch left-right
-    converse: bool = True  # state a random half of the statements the other way round
-    # More than the paper's 9000 (its test split stays 500): with plausible false statements
-    # nothing short of the whole relation predicts a label, and 9000 are memorised first.
-    train_size: int | None = 60000
-    # Curriculum: first these epochs over this many statements (a separate generated set)
-    # whose false ones name, on one side, an object the image lacks (a fraction
-    # `warmup_absent` of them): checking which objects exist, the names' grounding, then
-    # predicts labels. On plausible false statements only the whole relation does, and training
-    # from the start sat at chance.
-    warmup_size: int = 20000
-    warmup_epochs: int = 3
-    warmup_absent: float = 1.0
-    seed: int = 0
-    threads: int = 1
-    # the issue's budget: training stops after this many minutes (the epoch under way ends
-    # there and is validated like the others); None: no limit
-    max_minutes: float | None = 28.0
+    Batch 32, more updates an epoch than a larger batch: the task has a long plateau at chance.
+    The training split is larger than the paper's 9000 (its test split stays 500): with
+    plausible false statements nothing short of the whole relation predicts a label, and 9000
+    are memorised first. The curriculum's warm-up comes first: statements (a separate generated
+    set) whose false ones name, on one side, an object the image lacks, so that checking which
+    objects exist, the names' grounding, predicts labels; on plausible false statements only
+    the whole relation does, and training from the start sat at chance.
+    """
+
+    epochs: int | None = option(
+        None, "epochs over the training split after the warm-up (default: the model's)", low=1
+    )
+    batch_size: int = option(32, 'examples per optimizer step', low=1)
+    lr: float = option(1e-3, "Adam learning rate at the start (the paper's)", low=0.0)
+    lr_final: float = option(1e-4, 'learning rate at the end of the cosine decay', low=0.0)
+    val_fraction: float = option(
+        0.1, 'share of the training split held out for validation', low=0.01, high=0.9
+    )
+    mirror: bool = option(True, 'mirror a random half of each batch left to right')
+    converse: bool = option(True, 'state a random half of the statements the other way round')
+    train_size: int | None = option(
+        60000, "generated training statements (None: the paper's 9000)", low=1
+    )
+    warmup_size: int = option(20000, 'generated warm-up statements (0: no warm-up)', low=0)
+    warmup_epochs: int = option(3, 'epochs over the warm-up set (0: no warm-up)', low=0)
+    warmup_absent: float = option(
+        1.0, "share of the warm-up's false statements that name an absent object",
+        low=0.0, high=1.0,
+    )
+    seed: int = option(0, 'seed of the weights, the split and the batches', low=0, high=2**32 - 1)
+    threads: int = option(1, 'torch threads', low=1)
+    max_minutes: float | None = option(
+        28.0,
+        "the issue's budget: training stops after this many minutes, the epoch under way ends "
+        'there and is validated like the others (0 or None: no limit)',
+        low=0.0,
+    )
+
+    def __post_init__(self):
+        check(self)
 
 
 def encode(vocab: Vocabulary, statements: list[str]) -> torch.Tensor:
@@ -178,9 +193,7 @@ def train(
     """Train on ShapeWorld train, keep the epoch of best validation accuracy, write the .pt."""
     if model_name not in MODELS:
         raise ValueError(f'ShapeWorld has no model {model_name!r}; use one of {", ".join(MODELS)}')
-    epochs = tc.epochs if tc.epochs is not None else EPOCHS[model_name]
-    if epochs < 1 or tc.batch_size < 1:
-        raise ValueError(f'epochs and batch size must be positive, got {epochs}, {tc.batch_size}')
+    epochs = tc.epochs if tc.epochs is not None else EPOCHS[model_name]  # TrainConfig checks
     torch.manual_seed(tc.seed)
     torch.set_num_threads(tc.threads)
     data = load_split('train', cache_dir, n=tc.train_size)
@@ -212,7 +225,7 @@ def train(
         model.train()
         losses = []
         for x, t, y in batches(rng, tc):
-            if tc.max_minutes is not None and time.perf_counter() - start > 60 * tc.max_minutes:
+            if tc.max_minutes and time.perf_counter() - start > 60 * tc.max_minutes:
                 out_of_time = True
                 break
             loss = F.cross_entropy(model(x, t), y)
@@ -256,191 +269,3 @@ def train(
         loss_history=[[round(x, 5) for x in row] for row in history],
     )
     return path, summary
-
-
-# --- commands -----------------------------------------------------------------------------
-
-def add_cli_options(train_parser, eval_parser) -> None:
-    """Add the options of --task shapeworld (the noise options: noise.add_noise_options)."""
-    for p in (train_parser, eval_parser):
-        p.add_argument(
-            '--cache',
-            default=None,
-            help='ShapeWorld: folder of the generated splits (default: $SPATIAL_GROUNDING_CACHE '
-            'or ~/.cache/spatial_grounding_ros)',
-        )
-    eval_parser.add_argument(
-        '--image-noise',
-        type=int,
-        default=0,
-        metavar='K',
-        help='ShapeWorld: K patches of N(0, 1) pixels in each image, clear of the objects',
-    )
-
-
-def cmd_train(args, given: dict) -> int:
-    """`train --task shapeworld`: `given` holds the train options given (the grid tasks')."""
-    ours = {f.name for f in fields(TrainConfig)}
-    other = [name for name in given if name not in ours]
-    if other:
-        options = ', '.join('--' + name.replace('_', '-') for name in other)
-        raise ValueError(f'{options}: not an option of --task {TASK}')
-    path, summary = train(args.model, args.out, TrainConfig(**given), args.cache)
-    print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
-    return 0
-
-
-def cmd_eval(args) -> int:
-    if args.task != TASK:
-        raise ValueError(f'--image-noise is an option of --task {TASK}')
-    if args.obs_noise or args.unknown_words:
-        raise ValueError(f'--task {TASK} takes --image-noise and --text-noise, not --obs-noise '
-                         'or --unknown-words')
-    if args.image_noise < 0 or args.text_noise < 0:
-        raise ValueError('--image-noise and --text-noise count patches and words: 0 or more')
-    model, vocab, header = load(args.checkpoint)
-    result = {
-        'checkpoint': str(args.checkpoint),
-        'model': header['model'],
-        'task': TASK,
-        'split': args.split,
-        'image_noise': args.image_noise,
-        'text_noise': args.text_noise,
-        'seed': args.seed,
-        **accuracy(
-            model,
-            vocab,
-            load_split(args.split, args.cache),
-            args.image_noise,
-            args.text_noise,
-            args.seed,
-        ),
-    }
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(f'{header["model"]} on {TASK} {args.split} (n={result["n"]}): '
-              f'ACC {result["acc"]:.3f}')
-    return 0
-
-
-# --- `make reproduce-shapeworld` ----------------------------------------------------------
-
-REPRODUCED = ('t-vgg', 't-rnet-attn')  # table order: baseline first
-
-
-def markdown_tables(rows: list[dict], noise: list[dict]) -> tuple[str, str]:
-    """results/shapeworld.md (accuracy beside the paper's) and shapeworld_noise.md."""
-    main = [
-        'ShapeWorld true-or-false statements, test split; paper = Yang et al. 2020 Table 1.',
-        '',
-        '| model | ACC ours | ACC paper | n | epochs | train min |',
-        '| --- | --- | --- | --- | --- | --- |',
-    ]
-    for r in rows:
-        main.append(
-            f'| {r["model"]} | {r["test"]["acc"]:.3f} | {PAPER_ACC[r["model"]]:.2f} '
-            f'| {r["test"]["n"]} | {r["epochs"]} | {r["train_seconds"] / 60:.1f} |'
-        )
-    models = [r['model'] for r in rows]
-    table = {(e['noise'], e['k'], e['model']): e['acc'] for e in noise}
-    lines = [
-        'ShapeWorld test accuracy under noise (`spatial-grounding eval --task shapeworld '
-        '--image-noise K` / `--text-noise K`, seed 0).',
-        '',
-        '| noise | k | ' + ' | '.join(f'{m} ACC' for m in models) + ' |',
-        '| --- | --- |' + ' --- |' * len(models),
-    ]
-    for kind in ('image', 'text'):
-        for k in NOISE_KS:
-            accs = ' | '.join(f'{table[kind, k, m]:.3f}' for m in models)
-            lines.append(f'| {kind} | {k} | {accs} |')
-    return '\n'.join(main) + '\n', '\n'.join(lines) + '\n'
-
-
-def reproduce(
-    out: str | Path,
-    models=REPRODUCED,
-    threads: int = 1,
-    epochs_scale: float = 1.0,
-    eval_only: bool = False,
-    cache_dir: str | Path | None = None,
-) -> dict:
-    """
-    Train the models one after the other, ship their checkpoints, evaluate them clean and noisy.
-
-    `eval_only` skips training and evaluates the shipped checkpoints (the tables of a given
-    set of checkpoints, e.g. after the noise study changed).
-    """
-    from ..models.checkpoints import PACKAGED_DIR
-
-    out = Path(out)
-    test = load_split('test', cache_dir)
-    if not eval_only:
-        # one model after the other, one process of `threads` threads: on a shared 2-core
-        # machine two at once would each get less than a core
-        # the model the issue's minimum is about first
-        for name in sorted(models, key=lambda name: name != 't-rnet-attn'):
-            tc = TrainConfig(epochs=max(1, round(EPOCHS[name] * epochs_scale)), threads=threads)
-            path, summary = train(name, out / 'checkpoints', tc, cache_dir)
-            print(f'{TASK} {name}: {summary}', flush=True)
-            (PACKAGED_DIR / path.name).write_bytes(path.read_bytes())
-    rows, noise = [], []
-    for name in models:
-        packaged = PACKAGED_DIR / f'{TASK}_{name}.pt'
-        model, vocab, header = load(packaged)
-        row = {
-            'model': name,
-            'checkpoint': packaged.name,
-            'epochs': header['epochs'],
-            'best_epoch': header['best_epoch'],
-            'val_acc': header['val_acc'],
-            'train_seconds': header['train_seconds'],
-            'test': accuracy(model, vocab, test),
-        }
-        print(f'{TASK} {name}: test {row["test"]}', flush=True)
-        rows.append(row)
-        for kind in ('image', 'text'):
-            for k in NOISE_KS:
-                ks = (k, 0) if kind == 'image' else (0, k)
-                noise.append(
-                    {'model': name, 'noise': kind, 'k': k, **accuracy(model, vocab, test, *ks)}
-                )
-    command = 'spatial-grounding reproduce-shapeworld' + (' --eval-only' if eval_only else '')
-    meta = {
-        'command': command,
-        'machine': platform.processor() or platform.machine(),
-        'torch': torch.__version__,
-        'threads': threads,
-    }
-    results = {'meta': meta, 'runs': rows, 'noise': noise}
-    out.mkdir(parents=True, exist_ok=True)
-    (out / 'shapeworld.json').write_text(json.dumps(results, indent=1) + '\n')
-    main, noise_md = markdown_tables(rows, noise)
-    (out / 'shapeworld.md').write_text(main)
-    (out / 'shapeworld_noise.md').write_text(noise_md)
-    return results
-
-
-def cmd_reproduce(args) -> int:
-    reproduce(args.out, args.models, args.threads, args.epochs_scale, args.eval_only, args.cache)
-    return 0
-
-
-def register_cli(sub) -> None:
-    r = sub.add_parser(
-        'reproduce-shapeworld',
-        help='train and evaluate t-VGG and t-RNetAttn on ShapeWorld, ship the checkpoints, '
-        'write results/shapeworld.{json,md} and the noise table',
-    )
-    r.add_argument('--out', default='results')
-    r.add_argument('--models', nargs='+', default=list(REPRODUCED), choices=list(MODELS))
-    r.add_argument('--threads', type=int, default=1, help='torch threads per training run')
-    r.add_argument(
-        '--epochs-scale', type=float, default=1.0, help='multiply each epoch budget (quick check)'
-    )
-    r.add_argument(
-        '--eval-only', action='store_true', help='evaluate the shipped checkpoints, no training'
-    )
-    r.add_argument('--cache', default=None, help='folder of the generated splits')
-    r.set_defaults(func=cmd_reproduce)
