@@ -23,7 +23,8 @@ What a statement means, exactly (the tests read scenes against it independently)
   predicts nothing.
 
 Splits are generated from their own seeds (9000 train / 500 test by default, the paper's sizes)
-and cached as .npz under the cache directory, so a rerun loads them in a second.
+and cached as .npz under the cache directory, so a rerun reads them instead of drawing them
+again.
 """
 
 from __future__ import annotations
