@@ -7,7 +7,7 @@ DATA ?=
 DATA_ARG := $(if $(DATA),--data $(DATA))
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test reproduce reproduce-suite reproduce-ablation reproduce-rl \
+.PHONY: setup demo lint test test-fast reproduce reproduce-suite reproduce-ablation reproduce-rl \
 	reproduce-shapeworld reproduce-robustness bench clean
 
 setup: $(STAMP)
@@ -22,8 +22,19 @@ $(STAMP): requirements.txt setup.py
 demo: $(STAMP)
 	$(VENV)/bin/spatial-grounding demo --out demo_out
 
+# the ament linters over the package, launch files and tests, as test/test_flake8.py and
+# test/test_pep257.py run them
+lint: $(STAMP)
+	$(VENV)/bin/ament_flake8
+	$(VENV)/bin/ament_pep257 . test
+
 test: $(STAMP)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q test
+
+# the tests marked fast (test/conftest.py's FAST, or @pytest.mark.fast): under a minute on
+# 2 cores; `make test` runs them all
+test-fast: $(STAMP)
+	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q -m fast test
 
 reproduce: $(STAMP)
 	$(VENV)/bin/spatial-grounding reproduce $(DATA_ARG) --out results

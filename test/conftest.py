@@ -25,6 +25,46 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('ROS_DOMAIN_ID', str(random.Random(os.getpid()).randint(1, 100)))
 
 
+# `make test-fast` (pytest -m fast): these modules, but for tests whose names start with one of
+# the prefixes given. Together they run in under a minute on 2 cores: the layers and size
+# limits, the world, data and generator, the models on small maps, the message conversion,
+# the nodes' parameters, launch files and in-process nodes. Left to `make test`: the linters
+# (`make lint`), training, RL, the shipped checkpoints' evaluations, the suite and studies,
+# the demo's and colcon's processes.
+FAST = {
+    'test_layers': (),
+    'test_code_limits': (),
+    'test_world': (),
+    'test_data': (),
+    'test_generator': (),
+    'test_augment': (),
+    'test_noise': (),
+    'test_allocator': (),
+    'test_protocol': (),
+    'test_models': (),
+    'test_env': (),
+    'test_grounder_api': (),
+    'test_results': ('test_shipped_',),
+    'test_results_merge': (),
+    'test_ros_convert': (),
+    'test_ros_parameters': (),
+    'test_ros_config': (),
+    'test_grounder_node': (),
+    'test_grounder_orientation': (),
+    'test_bags': (),
+    'test_bag_recorder': (),
+    'test_copyright': (),
+}
+
+
+def pytest_collection_modifyitems(items):
+    """Mark FAST's tests `fast`."""
+    for item in items:
+        left_out = FAST.get(item.path.stem)
+        if left_out is not None and not item.name.startswith(left_out):
+            item.add_marker(pytest.mark.fast)
+
+
 @pytest.fixture(scope='session')
 def data_dir() -> Path:
     if not (DATA / 'puddleworld' / 'local.p').is_file():
