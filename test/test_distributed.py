@@ -79,7 +79,7 @@ def test_two_processes_train_the_same_weights_as_one(tmp_path, model):
 
 
 def test_shapeworld_training_refuses_torchrun(monkeypatch, capsys):
-    """Refuse --task shapeworld under torchrun: each copy would train and write the same file."""
+    """Refuse shapeworld-train under torchrun: each copy would train and write the same file."""
     monkeypatch.setenv('WORLD_SIZE', '2')
-    assert cli.main(['train', '--task', 'shapeworld', '--model', 't-vgg']) == 2
+    assert cli.main(['shapeworld-train', '--model', 't-vgg']) == 2
     assert 'not under torchrun' in capsys.readouterr().err

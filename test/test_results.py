@@ -277,7 +277,7 @@ def test_shipped_shapeworld_checkpoint_evaluates_to_its_row(run, tmp_path_factor
     """
     cache = tmp_path_factory.mktemp('shapeworld_cache')
     name = run['checkpoint'].removesuffix('.pt')
-    argv = ['eval', '--checkpoint', name, '--task', 'shapeworld', '--split', 'test', '--json']
+    argv = ['shapeworld-eval', '--checkpoint', name, '--split', 'test', '--json']
     assert cli.main(argv + ['--cache', str(cache)]) == 0
     got = json.loads(capsys.readouterr().out)
     assert got['model'] == run['model'] and got['n'] == run['test']['n']
