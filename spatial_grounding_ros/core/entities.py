@@ -76,6 +76,9 @@ class EntityTable:
     names: tuple[str, ...]
     obstacles: tuple[int, ...]
     embed_dim: int
+    # other words for each kind, aligned with names ("fridge": ("refrigerator",)); a table
+    # without any is (), so tables written before aliases existed compare equal
+    aliases: tuple[tuple[str, ...], ...] = ()
 
     def __len__(self) -> int:
         return len(self.names)
@@ -83,28 +86,42 @@ class EntityTable:
     def index(self, name: str) -> int:
         return self.names.index(name)
 
+    def aliases_of(self, kind: int) -> tuple[str, ...]:
+        return self.aliases[kind] if self.aliases else ()
+
     def to_dict(self) -> dict:
-        return {
+        d = {
             'domain': self.domain,
             'names': list(self.names),
             'obstacles': list(self.obstacles),
             'embed_dim': self.embed_dim,
         }
+        if any(self.aliases):
+            d['aliases'] = {n: list(a) for n, a in zip(self.names, self.aliases) if a}
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> 'EntityTable':
         try:
-            return cls(
+            names = tuple(str(n) for n in d['names'])
+            table = cls(
                 str(d['domain']),
-                tuple(str(n) for n in d['names']),
+                names,
                 tuple(int(i) for i in d['obstacles']),
                 int(d['embed_dim']),
+                aliases_by_kind(names, d.get('aliases') or {}),
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(
-                f'entity table is malformed ({exc!r}); it needs domain, names, '
-                'obstacles and embed_dim'
+                f'entity table is malformed ({exc}); it needs domain, names, '
+                'obstacles and embed_dim, and may give aliases (name: [other words])'
             ) from exc
+        bad = [i for i in table.obstacles if not 0 <= i < len(names)]
+        if bad:
+            raise ValueError(
+                f'entity table obstacles {bad} are not indices of its {len(names)} names'
+            )
+        return table
 
     @classmethod
     def from_yaml(cls, path: str | Path) -> 'EntityTable':
@@ -120,6 +137,24 @@ class EntityTable:
         if not isinstance(data, dict):
             raise ValueError(f'{path}: an entity table must be a mapping')
         return cls.from_dict(data)
+
+
+def aliases_by_kind(names: tuple[str, ...], aliases: dict) -> tuple[tuple[str, ...], ...]:
+    """Return a table's aliases (name -> word or list of words) as a tuple aligned with names."""
+    if not isinstance(aliases, dict):
+        got = type(aliases).__name__
+        raise TypeError(f'aliases must map a name to its other words, got {got}')
+    unknown = sorted(set(map(str, aliases)) - set(names))
+    if unknown:
+        raise ValueError(f'aliases name {unknown}, which are not names of the table')
+    out = []
+    for name in names:
+        words = aliases.get(name) or []
+        words = [words] if isinstance(words, str) else list(words)
+        if not all(isinstance(w, str) and w.strip() for w in words):
+            raise ValueError(f'the aliases of {name!r} must be non-empty strings, got {words}')
+        out.append(tuple(w.strip() for w in words))
+    return tuple(out) if any(out) else ()
 
 
 PUDDLEWORLD = EntityTable('puddleworld', PUDDLEWORLD_NAMES, (1,), 7)
