@@ -33,7 +33,7 @@ class Task:
     epochs: int  # the budget; the validation split picks the best epoch within it
     synthetic: int  # generated examples added to training (validation and test stay human)
     world_instructions: bool  # the training worlds' synthetic pickle instructions
-    mirrors: bool  # the three mirror images of each human example (augment.py); RL too
+    mirrors: bool  # the three mirror images of each human example (data/augment.py); RL too
     attention_warmup: float  # share of epochs t-RNetAttn trains with (uniform) attention off
     goal_weight: float  # weight of the goal-cell cross-entropy beside the MSE
     # ModelConfig fields of this task's models (empty: the paper's model)

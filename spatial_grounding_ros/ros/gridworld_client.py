@@ -5,7 +5,7 @@
 # https://opensource.org/licenses/MIT.
 
 """
-A client of the gridworld node with env.GridWorldEnv's interface, so rl.py's loop runs unchanged.
+A client of the gridworld node with GridWorldEnv's interface: training/rl.py runs on it unchanged.
 
 reset() calls next_episode and reads entity_map, instruction and agent_pose; step() publishes an
 action and waits for that move's agent_pose, reward and terminated. Observations and the 5-tuple

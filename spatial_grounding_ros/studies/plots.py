@@ -64,7 +64,7 @@ def draw_map(ax, grid: np.ndarray, entities: EntityTable) -> None:
     """
     Draw the entity map: obstacles shaded, objects as the first letters of their names.
 
-    Kinds past the table (the robustness study's unseen objects, noise.py) are blue stars in a
+    Kinds past the table (the robustness study's unseen objects, data/noise.py) are blue stars in a
     circle, as in the paper's figures.
     """
     ax.imshow(np.isin(grid, entities.obstacles), cmap='Blues', vmin=0, vmax=2)

@@ -8,7 +8,7 @@
 The robustness study (paper section 5.3, Figure 5): how much worse under noise.
 
 Each checkpoint is evaluated on a task's clean test set and at every k of each noise
-(noise.py); md_rel = MD / clean MD - 1 is the paper's curve.
+(data/noise.py); md_rel = MD / clean MD - 1 is the paper's curve.
 
     spatial-grounding robustness --task pw-local --checkpoints pw-local_t-rnet-attn \
         pw-local_t-cnn --ks 0 1 2 5 10 --json --out results
