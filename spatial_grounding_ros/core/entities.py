@@ -68,8 +68,8 @@ class EntityTable:
     """
     Entity names, obstacles and the paper's embedding size.
 
-    Names of the entity indices 0..n-1, which of them are obstacles (reward -1), and the
-    embedding size the paper uses for this domain.
+    A grid cell holds an index 0..n-1 into `names`; the kinds in `obstacles` have reward -1,
+    and `embed_dim` is the size the paper embeds this domain's kinds at.
     """
 
     domain: str
