@@ -35,7 +35,7 @@ line and the paper's RL rows (reproduce.py) live outside this file.
 from __future__ import annotations
 
 import copy
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 import functools
 from pathlib import Path
 import time
@@ -105,8 +105,8 @@ class ReplayBuffer:
     """
     Transitions (map, instruction, s, a, r, s', done).
 
-    Transitions (map, instruction, s, a, r, s', done), map and instruction stored once
-    per distinct pair. Because moves are deterministic, the cells entered in a map, with
+    Each distinct (map, instruction) pair is stored once and the transitions name it by id.
+    Because moves are deterministic, the cells entered in a map, with
     their observed reward and terminal flag, are all a regression step needs: `visited`,
     `reward`, `terminal` (per map, (H, W)) are kept up to date from the transitions.
 
@@ -303,6 +303,126 @@ def make_envs(data: GroundingSet, cfg: RLConfig) -> tuple[list[GridWorldEnv], li
     return envs, [cfg.seed + (n << 32) for n in range(cfg.envs)]
 
 
+def resolve_config(cfg: RLConfig, task: str, shape: tuple[int, int]) -> RLConfig:
+    """Fill in the options whose default depends on the task or the map size."""
+    return replace(
+        cfg,
+        step_limit=cfg.step_limit or 5 * max(shape),
+        # generated worlds (not in TASKS) are PuddleWorld's kind: mirrored too
+        mirrors=(TASKS[task].mirrors if task in TASKS else True)
+        if cfg.mirrors is None
+        else cfg.mirrors,
+    )
+
+
+@dataclass
+class Learner:
+    """
+    What fitted value iteration updates: the online and target networks and their data.
+
+    `target_maps` caches the target network's predicted map of each buffer map until the next
+    sync; `updates` counts the regression steps taken so far.
+    """
+
+    model: torch.nn.Module
+    target_model: torch.nn.Module
+    opt: torch.optim.Optimizer
+    vocab: Vocabulary
+    mcfg: ModelConfig
+    cfg: RLConfig
+    target_maps: dict = field(default_factory=dict)
+    updates: int = 0
+
+    @classmethod
+    def build(cls, model_name: str, train: GroundingSet, cfg: RLConfig) -> Learner:
+        """Build a fresh `model_name` (seeded by the caller) and its vocabulary of `train`."""
+        # the mirror images' swapped direction words are trained on too
+        vocab = Vocabulary.build(
+            list(train.instructions)
+            + [
+                mirror_instruction(t, axes)
+                for t in train.instructions
+                if cfg.mirrors
+                for axes in MIRROR_IMAGES
+            ]
+        )
+        mcfg = ModelConfig(
+            n_entities=len(train.entities), vocab_size=len(vocab),
+            embed_dim=train.entities.embed_dim,
+        )
+        model = build_model(model_name, mcfg)
+        target_model = copy.deepcopy(model)
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+        return cls(model, target_model, opt, vocab, mcfg, cfg)
+
+    def fit(self, buffer: ReplayBuffer, rng: np.random.Generator) -> list[float]:
+        """Take one round of regression steps, syncing the target network on schedule."""
+        losses = []
+        for _ in range(self.cfg.updates_per_round):
+            losses.append(
+                fitted_value_step(
+                    self.model, self.target_maps, self.target_model, self.vocab, buffer,
+                    self.opt, self.cfg, rng,
+                )
+            )
+            self.updates += 1
+            if self.updates % self.cfg.target_sync == 0:
+                self.target_model.load_state_dict(self.model.state_dict())
+                self.target_maps.clear()
+        return losses
+
+
+def epsilon_at(cfg: RLConfig, episodes: int) -> float:
+    """Exploration rate after `episodes` episodes: linear decay, then constant."""
+    progress_frac = episodes / max(1, cfg.eps_fraction * cfg.episodes)
+    return cfg.eps_start + min(1.0, progress_frac) * (cfg.eps_end - cfg.eps_start)
+
+
+def run_rounds(
+    learner: Learner,
+    envs: list,
+    seeds: list[int] | None,
+    buffer: ReplayBuffer,
+    rng: np.random.Generator,
+    label: str | None,
+) -> tuple[int, list[tuple[int, float, float, float]]]:
+    """
+    Alternate exploration and fitted value iteration until `cfg.episodes` episodes are run.
+
+    Returns the episodes run and one log row per round: (episodes so far, mean return, mean
+    loss, epsilon). With a `label`, every 20th round and the last are printed under it.
+    """
+    cfg, model = learner.cfg, learner.model
+    episodes, log = 0, []
+    start = time.perf_counter()
+    warmup = (
+        int(cfg.episodes * cfg.attention_warmup) if model.capabilities.relation_attention else 0
+    )
+    while episodes < cfg.episodes:
+        # as in supervised training: attention weights start at 0, so until they switch on
+        # t-RNetAttn is exactly t-RNet and the much cheaper attention-free forward is used
+        if warmup:
+            model.attention_on = learner.target_model.attention_on = episodes >= warmup
+        # 1. explore with the current predicted maps
+        epsilon = epsilon_at(cfg, episodes)
+        batch = envs[: max(1, min(len(envs), cfg.episodes - episodes))]
+        returns = run_episodes(batch, model, learner.vocab, buffer, epsilon, rng, seeds)
+        seeds = None  # seeded once, at the first reset
+        episodes += len(batch)
+        # 2. fitted value iteration on the replay buffer
+        losses = learner.fit(buffer, rng)
+        log.append((episodes, float(np.mean(returns)), float(np.mean(losses)), epsilon))
+        if label and (len(log) % 20 == 0 or episodes >= cfg.episodes):
+            print(
+                f'{label}: {episodes} episodes, '
+                f'return {np.mean([row[1] for row in log[-20:]]):.2f}, '
+                f'loss {np.mean([row[2] for row in log[-20:]]):.3f}, epsilon {epsilon:.2f}, '
+                f'{time.perf_counter() - start:.0f} s',
+                flush=True,
+            )
+    return episodes, log
+
+
 def train_rl(
     task: str,
     model_name: str,
@@ -317,8 +437,10 @@ def train_rl(
     """
     Train `model_name` by RL on `task`'s train split and evaluate it.
 
-    Train `model_name` by RL on `task`'s train split, evaluate on its test split, write
-    `out/rl_<task>_<model>.pt`. `envs` replaces the in-process environments (the ROS client).
+    The test split's metrics go into the returned summary and the checkpoint
+    `out/rl_<task>_<model>.pt`, whose path is returned too. `train_data` and `test_data`
+    replace the splits read from `data_dir`; `envs` replaces the in-process environments
+    (the ROS client).
     """
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
@@ -326,74 +448,19 @@ def train_rl(
     train = train_data if train_data is not None else load_episodes(task, 'train', str(data_dir))
     test = test_data if test_data is not None else load_episodes(task, 'test', str(data_dir))
     shape = tuple(train.grids.shape[1:])
-    cfg = replace(
-        cfg,
-        step_limit=cfg.step_limit or 5 * max(shape),
-        # generated worlds (not in TASKS) are PuddleWorld's kind: mirrored too
-        mirrors=(TASKS[task].mirrors if task in TASKS else True)
-        if cfg.mirrors is None
-        else cfg.mirrors,
-    )
-    # the mirror images' swapped direction words are trained on too
-    vocab = Vocabulary.build(
-        list(train.instructions)
-        + [
-            mirror_instruction(t, axes)
-            for t in train.instructions
-            if cfg.mirrors
-            for axes in MIRROR_IMAGES
-        ]
-    )
-    mcfg = ModelConfig(
-        n_entities=len(train.entities), vocab_size=len(vocab), embed_dim=train.entities.embed_dim
-    )
-    model = build_model(model_name, mcfg)
-    target_model = copy.deepcopy(model)
-    opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+    cfg = resolve_config(cfg, task, shape)
+    learner = Learner.build(model_name, train, cfg)
     # environments given (the ROS client) are seeded by whoever made them
     envs, seeds = make_envs(train, cfg) if envs is None else (envs, None)
     buffer = ReplayBuffer(shape, cfg.mirrors)
-    target_maps: dict[int, np.ndarray] = {}
-    episodes, updates, log = 0, 0, []
     start = time.perf_counter()
-    warmup = (
-        int(cfg.episodes * cfg.attention_warmup) if model.capabilities.relation_attention else 0
-    )
-    while episodes < cfg.episodes:
-        # as in supervised training: attention weights start at 0, so until they switch on
-        # t-RNetAttn is exactly t-RNet and the 5-10x cheaper attention-free forward is used
-        if warmup:
-            model.attention_on = target_model.attention_on = episodes >= warmup
-        # 1. explore with the current predicted maps
-        progress_frac = episodes / max(1, cfg.eps_fraction * cfg.episodes)
-        epsilon = cfg.eps_start + min(1.0, progress_frac) * (cfg.eps_end - cfg.eps_start)
-        batch = envs[: max(1, min(len(envs), cfg.episodes - episodes))]
-        returns = run_episodes(batch, model, vocab, buffer, epsilon, rng, seeds)
-        seeds = None  # seeded once, at the first reset
-        episodes += len(batch)
-        # 2. fitted value iteration on the replay buffer
-        losses = []
-        for _ in range(cfg.updates_per_round):
-            losses.append(
-                fitted_value_step(model, target_maps, target_model, vocab, buffer, opt, cfg, rng)
-            )
-            updates += 1
-            if updates % cfg.target_sync == 0:
-                target_model.load_state_dict(model.state_dict())
-                target_maps.clear()
-        log.append((episodes, float(np.mean(returns)), float(np.mean(losses)), epsilon))
-        if progress and (len(log) % 20 == 0 or episodes >= cfg.episodes):
-            print(
-                f'{task} {model_name}: {episodes} episodes, '
-                f'return {np.mean([row[1] for row in log[-20:]]):.2f}, '
-                f'loss {np.mean([row[2] for row in log[-20:]]):.3f}, epsilon {epsilon:.2f}, '
-                f'{time.perf_counter() - start:.0f} s',
-                flush=True,
-            )
+    label = f'{task} {model_name}' if progress else None
+    episodes, log = run_rounds(learner, envs, seeds, buffer, rng, label)
     train_seconds = time.perf_counter() - start
     # 3. evaluate the predicted maps of the test split (true maps used only here)
+    model = learner.model
     metrics = world.evaluate_maps(
-        predict(model, vocab, test), test.values, test.rewards, test.terminal
+        predict(model, learner.vocab, test), test.values, test.rewards, test.terminal
     )
     summary = {
         'task': task,
@@ -402,7 +469,7 @@ def train_rl(
         'episodes': episodes,
         'transitions': len(buffer.transitions),
         'maps_seen': buffer.n_observed,
-        'updates': updates,
+        'updates': learner.updates,
         'train_seconds': round(train_seconds, 1),
         'rl_config': asdict(cfg),
     }
@@ -410,8 +477,8 @@ def train_rl(
         Path(out) / f'rl_{task}_{model_name}.pt',
         model_name,
         model,
-        mcfg,
-        vocab,
+        learner.mcfg,
+        learner.vocab,
         train.entities,
         task=task,
         training='rl (fitted value iteration)',
