@@ -234,6 +234,13 @@ def add_rl_commands(sub) -> None:
     r.set_defaults(func=cmd_reproduce_rl)
 
 
+def ros_round_trip_latency(*args, **kwargs) -> dict:
+    """Bench's ROS measurement: ros/bench_ros.py's, imported only when bench runs it."""
+    from .ros.bench_ros import round_trip_latency
+
+    return round_trip_latency(*args, **kwargs)
+
+
 def _extensions():
     """
     Subcommands defined next to the code they drive.
@@ -246,7 +253,7 @@ def _extensions():
     from .studies import bench, explain, robustness, suite
 
     found = [
-        bench.register_cli,
+        functools.partial(bench.register_cli, ros_latency=ros_round_trip_latency),
         bags.register_cli,
         suite.register_cli,
         shapeworld.register_cli,

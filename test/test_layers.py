@@ -124,14 +124,10 @@ FLOORS = (
     ('ros',),
     ('cli',),
 )
-# Upward imports that are known and why; each must still exist (test_upward_exceptions_are_real).
-UPWARD = {
-    (f'{PACKAGE}.studies.bench', f'{PACKAGE}.ros.bench_ros'): (
-        'bench measures the end-to-end ROS latency too; the import is lazy, inside run(), '
-        'behind --skip-ros, so studies still load without rclpy. To remove: cli.py passes '
-        'ros.bench_ros.round_trip_latency to bench.run'
-    ),
-}
+# Upward imports that are known and why, (importer, imported): reason; each must still exist
+# (test_upward_exceptions_are_real). None: what a module needs from above is passed in by cli.py
+# (bench's ROS round trip, for one).
+UPWARD: dict[tuple[str, str], str] = {}
 
 
 def floor(module: str) -> int:

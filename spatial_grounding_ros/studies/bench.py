@@ -14,7 +14,8 @@
 - throughput of one batched forward over 512 maps of 10x10;
 - one training step (forward, loss, backward, Adam) on a batch of 64 generated 10x10 maps, with
   attention off (the warm-up epochs) and on, for a fresh model of the checkpoint's config;
-- end-to-end ROS latency, instruction published -> goal_pose received (ros/bench_ros.py);
+- end-to-end ROS latency, instruction published -> goal_pose received, measured by the
+  function cli.py passes in (ros/bench_ros.py's round_trip_latency; studies sit below ros);
 - memory: this process's RSS after 100 and after 10,000 Grounder.ground() requests.
 Results go to one JSON file with the machine's description and which targets were met, and its
 table to a markdown file beside it (the README's benchmark table).
@@ -22,11 +23,13 @@ table to a markdown file beside it (the README's benchmark table).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from pathlib import Path
 import platform
 import time
+from typing import Callable
 
 import numpy as np
 import torch
@@ -224,7 +227,15 @@ def memory_growth(grounder: Grounder, early: int, total: int) -> dict:
     }
 
 
-def run(args) -> dict:
+def run(args, ros_latency: Callable[..., dict] | None = None) -> dict:
+    """
+    Measure every section `args` asks for and return the results, checked against TARGETS.
+
+    `ros_latency(checkpoint, grid, instructions, requests, progress=...)` measures the ROS round
+    trip (cli.py passes ros/bench_ros.py's); without it only --skip-ros runs.
+    """
+    if not args.skip_ros and ros_latency is None:
+        raise ValueError('bench has no ROS measurement here: pass --skip-ros')
     if args.threads > 0:
         torch.set_num_threads(args.threads)
     grounder = Grounder.from_checkpoint(args.checkpoint)
@@ -247,12 +258,10 @@ def run(args) -> dict:
     result['throughput'] = batch_throughput(grounder, args.batch, args.batch_reps)
     result['training_step'] = training_step(grounder, args.train_batch, args.budget)
     if not args.skip_ros:
-        from ..ros.bench_ros import round_trip_latency
-
         grid, _ = world_of_size(10, seed=3)
         texts = [text for text, _ in global_goals(grid) + local_goals(grid)]
         with tqdm(total=args.ros_requests, desc='ROS round trips') as progress:
-            result['ros_end_to_end'] = round_trip_latency(
+            result['ros_end_to_end'] = ros_latency(
                 args.checkpoint, grid, texts, args.ros_requests, progress=progress
             )
     result['memory'] = memory_growth(grounder, 100, args.memory_requests)
@@ -360,8 +369,8 @@ def table(result: dict) -> str:
     return '\n'.join(lines) + '\n'
 
 
-def cmd_bench(args) -> int:
-    result = run(args)
+def cmd_bench(args, ros_latency: Callable[..., dict] | None = None) -> int:
+    result = run(args, ros_latency)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=2) + '\n')
@@ -374,7 +383,8 @@ def cmd_bench(args) -> int:
     return 0
 
 
-def register_cli(subparsers) -> None:
+def register_cli(subparsers, ros_latency: Callable[..., dict] | None = None) -> None:
+    """Add the `bench` subcommand; `ros_latency` measures its ROS round trip (see run)."""
     b = subparsers.add_parser(
         'bench', help='fast vs reference latency per map size, throughput, ROS round trip, memory'
     )
@@ -423,4 +433,4 @@ def register_cli(subparsers) -> None:
         "torch_threads is 1 too); 0: torch's default",
     )
     b.add_argument('--skip-ros', action='store_true', help='no end-to-end ROS measurement')
-    b.set_defaults(func=cmd_bench)
+    b.set_defaults(func=functools.partial(cmd_bench, ros_latency=ros_latency))
