@@ -26,6 +26,7 @@ from grounder_helpers import make_probe, random_checkpoint, unique_namespace  # 
 from rclpy.parameter import Parameter  # noqa: E402
 from spatial_grounding_ros.data.generator import generate  # noqa: E402
 from spatial_grounding_ros.grounder import Grounder  # noqa: E402
+from spatial_grounding_ros.models.protocol import TextVectorCode  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
@@ -371,7 +372,7 @@ class FailingModel(torch.nn.Module):
     """
 
     def text_code(self, tokens):
-        return {}
+        return TextVectorCode(text=torch.zeros(1, 7))
 
     def ground(self, grids, code, return_aux=False):
         raise RuntimeError(
