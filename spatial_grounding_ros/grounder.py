@@ -1,15 +1,17 @@
-# Copyright 2026 spatial_grounding_ros developers
-#
-# Use of this source code is governed by an MIT-style
-# license that can be found in the LICENSE file or at
-# https://opensource.org/licenses/MIT.
-
 """
 A plain Python API over a trained model, for users who do not want topics.
 
     g = Grounder.from_checkpoint()                    # the packaged pw_t-rnet-attn
     result = g.ground(grid, "reach cell two below the westernmost rock")
-    result.goal, result.values, result.relation_map, result.attention
+    result.goal, result.confidence, result.reason, result.values, result.alternatives
+
+    kitchen = Grounder.from_checkpoint(entities='kitchen.yaml')  # a table of your own
+
+A grid may use any entity table: the landmarks an instruction names (by name, alias, plural
+or a one-letter typo) are grounded as the model's own kinds (core/lexicon.py). When the
+table and the map show that no cell fits (a landmark that is not there, a name no kind has,
+a cell past the edge, several landmarks named as one, an obstacle), or the model is unsure,
+the grounding declines: `goal` is None and `reason` says why (core/checks.py).
 
 The ROS grounder node is a thin adapter over this class.
 """
@@ -17,11 +19,15 @@ The ROS grounder node is a thin adapter over this class.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import torch
 
+from .core.checks import structural_reason
+from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
@@ -29,35 +35,117 @@ from .models.protocol import TextCode
 DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 
 
+# how many next-best cells a grounding reports
+ALTERNATIVES = 3
+# the reasons a grounding may decline with (core/checks.py has the structural ones)
+REASONS = (
+    'referent-missing',
+    'unknown-landmark',
+    'off-map',
+    'ambiguous',
+    'goal-on-obstacle',
+    'low-confidence',
+)
+
+
 @dataclass
 class Grounding:
-    """One grounded instruction. Maps are (H, W) with row 0 = north."""
+    """
+    One grounded instruction. Maps are (H, W) with row 0 = north.
+
+    `goal` is None when the grounding declines, and `reason` then says why, as a code and
+    words ('referent-missing: rock'); `best` is the model's best cell all the same.
+    `confidence` is the calibrated chance that `best` is the cell meant; `alternatives` the
+    next best cells with theirs.
+    """
 
     instruction: str
     values: np.ndarray  # predicted value map
     relation_map: np.ndarray  # Z1 (the paper's interpretability view is |Z1|)
-    goal: tuple[int, int]  # (row, col) of the best cell
+    goal: tuple[int, int] | None  # (row, col) of the cell to go to; None: declined
     words: list[str]
     attention: list[float] | None  # per word, averaged over cell pairs (t-RNetAttn only)
     unknown_words: list[str]
+    best: tuple[int, int] = (0, 0)
+    confidence: float = 0.0
+    reason: str | None = None
+    alternatives: list[tuple[tuple[int, int], float]] = field(default_factory=list)
+    landmarks: list[str] = field(default_factory=list)  # the table's names the words named
+    # the cell of a named landmark nearest the best cell (a goal can face it), or None
+    referent: tuple[int, int] | None = None
+    model_instruction: str = ''  # what the model read: the landmarks in its own names
+
+    @property
+    def reason_code(self) -> str | None:
+        """Return the reason's code alone ('referent-missing'), or None."""
+        return None if self.reason is None else self.reason.split(':')[0]
+
+
+def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | None:
+    """Return an entity table given as a table, a YAML path or None."""
+    if entities is None or isinstance(entities, EntityTable):
+        return entities
+    return EntityTable.from_yaml(entities)
+
+
+def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
+    """Return the cell of any of `kinds` nearest `cell` (Euclidean), or None."""
+    where = np.argwhere(np.isin(grid, kinds))
+    if not len(where):
+        return None
+    nearest = where[((where - np.asarray(cell)) ** 2).sum(1).argmin()]
+    return int(nearest[0]), int(nearest[1])
 
 
 class Grounder:
-    def __init__(self, loaded: Loaded, cached_instructions: int = 64):
+    def __init__(
+        self,
+        loaded: Loaded,
+        entities: EntityTable | None = None,
+        min_confidence: float = 0.0,
+        cached_instructions: int = 64,
+    ):
         """
-        Wrap a loaded checkpoint.
+        Wrap a loaded checkpoint, for maps in `entities` (default: the checkpoint's table).
 
+        A model trained on PuddleWorld reads any table (core/lexicon.Translation); others
+        only their own. `min_confidence` (0..1): a grounding less sure than this declines.
         The text codes of the last `cached_instructions` instructions are kept (t-RNetAttn: the
         relation table over all kinds), since a node grounds the same instruction on new maps.
         """
+        if not 0 <= min_confidence <= 1:
+            raise ValueError(f'min_confidence must be in 0..1, got {min_confidence}')
         self.loaded, self.cached_instructions = loaded, cached_instructions
-        self.model, self.vocab, self.entities = loaded.model, loaded.vocab, loaded.entities
+        self.model, self.vocab = loaded.model, loaded.vocab
+        self.model_entities = loaded.entities
+        self.entities = entities if entities is not None else loaded.entities
+        self.min_confidence = min_confidence
+        self.translation = None
+        if loaded.entities.domain == 'puddleworld':
+            self.translation = Translation(
+                self.entities, loaded.entities, PUDDLEWORLD_UNIQUE, PUDDLEWORLD_NONUNIQUE
+            )
+        elif self.entities.names != loaded.entities.names:
+            raise ValueError(
+                f'a model trained on the {loaded.entities.domain} table reads only that table; '
+                f'the {self.entities.domain} table needs a PuddleWorld model'
+            )
+        self.lexicon = self.translation.lexicon if self.translation else Lexicon(self.entities)
+        self.known = frozenset(self.vocab.words[2:])
+        # calibration: confidence is the softmax of the values at this temperature
+        self.temperature = float(loaded.header.get('calibration', {}).get('temperature', 1.0))
         self.model.eval()
         self.text_codes: OrderedDict[str, TextCode] = OrderedDict()  # least recently used first
 
     @classmethod
-    def from_checkpoint(cls, checkpoint: str = DEFAULT_CHECKPOINT) -> 'Grounder':
-        return cls(load_checkpoint(checkpoint))
+    def from_checkpoint(
+        cls,
+        checkpoint: str | Path = DEFAULT_CHECKPOINT,
+        entities: str | Path | EntityTable | None = None,
+        min_confidence: float = 0.0,
+    ) -> 'Grounder':
+        """Load a packaged checkpoint by name or a path, for maps of any entity table."""
+        return cls(load_checkpoint(checkpoint), resolve_table(entities), min_confidence)
 
     def check(self, grid: np.ndarray, instruction: str) -> None:
         """Raise ValueError naming what is wrong with an input."""
@@ -89,9 +177,11 @@ class Grounder:
 
     def check_instruction(self, instruction: str) -> None:
         """Run the instruction half of check(): the node checks one before any map arrives."""
-        if not tokenize(instruction):
+        words = tokenize(instruction)
+        if not words:
             raise ValueError('instruction has no words')
-        if all(i == UNK for i in self.vocab.encode(instruction)):
+        named = {i for m in self.lexicon.mentions(words) for i in range(m.start, m.end)}
+        if not named and all(i == UNK for i in self.vocab.encode(instruction)):
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
@@ -108,18 +198,58 @@ class Grounder:
     @torch.no_grad()
     def ground(self, grid: np.ndarray, instruction: str) -> Grounding:
         self.check(grid, instruction)
-        grids = torch.as_tensor(np.asarray(grid, dtype=np.int64))[None]
-        values, aux = self.model.ground(grids, self.text_code(instruction), return_aux=True)
-        values = values[0].numpy()
-        row, col = np.unravel_index(int(values.argmax()), values.shape)
+        grid = np.asarray(grid, dtype=np.int64)
         words = tokenize(instruction)
+        if self.translation is not None:
+            translated = self.translation(grid, instruction)
+            model_grid, model_text = translated.grid, translated.instruction
+            mentions = list(translated.mentions)
+        else:
+            model_grid, model_text, mentions = grid, instruction, self.lexicon.mentions(words)
+        values, aux = self.model.ground(
+            torch.as_tensor(model_grid)[None], self.text_code(model_text), return_aux=True
+        )
+        values = values[0].numpy()
+        best, confidence, alternatives = self.judge(values)
+        reason = structural_reason(self.entities, grid, words, mentions, self.known)
+        if reason is None and int(grid[best]) in self.entities.obstacles:
+            reason = 'goal-on-obstacle'
+        if reason is None and confidence < self.min_confidence:
+            reason = f'low-confidence: {confidence:.2f} < {self.min_confidence:.2f}'
         attention = aux['attention']
+        named = {i for m in mentions for i in range(m.start, m.end)}
         return Grounding(
             instruction,
             values,
             aux['relation_map'][0].numpy(),
-            (int(row), int(col)),
+            None if reason else best,
             words,
             None if attention is None else attention[0].tolist(),
-            [w for w in words if w not in self.vocab.index],
+            [w for i, w in enumerate(words) if w not in self.vocab.index and i not in named],
+            best=best,
+            confidence=confidence,
+            reason=reason,
+            alternatives=alternatives,
+            landmarks=self.named(mentions),
+            referent=nearest_cell(grid, [m.kind for m in mentions], best),
+            model_instruction=model_text,
         )
+
+    def judge(self, values: np.ndarray):
+        """Return the best cell, its calibrated probability, and the next best with theirs."""
+        flat = values.reshape(-1).astype(np.float64) / self.temperature
+        p = np.exp(flat - flat.max())
+        p /= p.sum()
+        best = int(np.argmax(flat))  # the first of equal maxima, as numpy's argmax
+        k = min(ALTERNATIVES + 1, p.size)
+        top = np.argpartition(-p, k - 1)[:k]
+        others = [i for i in top[np.argsort(-p[top], kind='stable')] if i != best][:ALTERNATIVES]
+
+        def cell(i):
+            return tuple(int(x) for x in np.unravel_index(i, values.shape))
+
+        return cell(best), float(p[best]), [(cell(i), float(p[i])) for i in others]
+
+    def named(self, mentions: list[Mention]) -> list[str]:
+        """Return the table's names of the landmarks mentioned, each once, in order."""
+        return [self.entities.names[k] for k in dict.fromkeys(m.kind for m in mentions)]

@@ -48,7 +48,7 @@ def grid_inputs(n_entities: int, size: int) -> np.ndarray:
 
 
 def grid_outputs(name: str) -> dict[str, np.ndarray]:
-    """Value maps (full forward) and the Grounder's value maps and Z1, per size."""
+    """Value maps (full forward), and value maps and Z1 a map at a time (text code, ground)."""
     from spatial_grounding_ros.grounder import Grounder
     from spatial_grounding_ros.training.supervised import predict_maps
 
@@ -59,9 +59,17 @@ def grid_outputs(name: str) -> dict[str, np.ndarray]:
         out[f'{name}/forward/{size}'] = predict_maps(
             grounder.model, grounder.vocab, grids, INSTRUCTIONS
         )
-        groundings = [grounder.ground(g, t) for g, t in zip(grids, INSTRUCTIONS)]
-        out[f'{name}/ground/{size}'] = np.stack([g.values for g in groundings])
-        out[f'{name}/z1/{size}'] = np.stack([g.relation_map for g in groundings])
+        # the node's fast path, a map at a time: the text code, then ground
+        values, z1 = [], []
+        with torch.no_grad():
+            for grid, text in zip(grids, INSTRUCTIONS):
+                tokens = torch.as_tensor(grounder.vocab.encode_batch([text]))
+                code = grounder.model.text_code(tokens)
+                v, aux = grounder.model.ground(torch.as_tensor(grid)[None], code, return_aux=True)
+                values.append(v[0].numpy())
+                z1.append(aux['relation_map'][0].numpy())
+        out[f'{name}/ground/{size}'] = np.stack(values)
+        out[f'{name}/z1/{size}'] = np.stack(z1)
     return out
 
 

@@ -5,11 +5,12 @@
 # https://opensource.org/licenses/MIT.
 
 """
-One map at a time (as the node and Grounder.ground do) equals the same maps in one batch.
+A model's value maps one map at a time (as the node grounds) equal the same maps in one batch.
 
-The suite, `eval` and the robustness study batch their maps; this is what lets their numbers
-stand for the node's. A batch of one once took a path of its own in the far relation and
-dropped every landmark kind but one beyond 13x13 (issue 24).
+`eval` and the robustness study batch their maps; this is what lets their numbers stand for
+the model the node runs (the Grounder adds what it does to a map, a landmark table's
+translation, the same way batched or not). A batch of one once took a path of its own in the
+far relation and dropped every landmark kind but one beyond 13x13 (issue 24).
 """
 
 import numpy as np
@@ -41,13 +42,23 @@ def worlds(grounder: Grounder, size: int, n: int, seed: int):
     return grids, texts
 
 
+def one_at_a_time(grounder: Grounder, grids, texts) -> np.ndarray:
+    """Value maps the way the node grounds: a text code per instruction, then one map."""
+    out = []
+    with torch.no_grad():
+        for grid, text in zip(grids, texts):
+            code = grounder.model.text_code(torch.as_tensor(grounder.vocab.encode_batch([text])))
+            out.append(grounder.model.ground(torch.as_tensor(grid)[None], code)[0].numpy())
+    return np.stack(out)
+
+
 @pytest.mark.parametrize('size', [16, 32])
 @pytest.mark.parametrize('name', GRID_CHECKPOINTS)
 def test_one_map_at_a_time_equals_the_batch(name, size):
     grounder = Grounder.from_checkpoint(name)
     grids, texts = worlds(grounder, size, 12, seed=size)
     assert len(np.unique(grids)) > 4  # several landmark kinds, so the far relation has a choice
-    single = np.stack([grounder.ground(g, t).values for g, t in zip(grids, texts)])
+    single = one_at_a_time(grounder, grids, texts)
     # the evaluations' path: the full forward over one batch
     batched = predict_maps(grounder.model, grounder.vocab, grids, texts)
     np.testing.assert_allclose(single, batched, rtol=0, atol=TOLERANCE)

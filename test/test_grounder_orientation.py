@@ -64,6 +64,7 @@ def test_model_north_is_largest_y(ros_context, tmp_path):
         [Parameter('checkpoint', value=str(checkpoint))],
     )
     grid = np.zeros((6, 8), int)
+    grid[3, 2] = 2  # the star named (a map without it would be declined: referent-missing)
     # a fresh node: the instruction comes first and is held until the map arrives
     before = probe.counts()
     probe.publish_instruction('reach cell on top of star')

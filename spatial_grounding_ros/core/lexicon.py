@@ -109,15 +109,36 @@ class Lexicon:
         }
         return close.pop() if len(close) == 1 else None
 
+    def phrase_kind(self, key: tuple[str, ...]) -> int | None:
+        """Return the kind a phrase of several words names, with one typo at most, or None."""
+        if key in self.phrases:
+            return self.phrases[key]
+        close = {
+            kind
+            for phrase, kind in self.phrases.items()
+            if len(phrase) == len(key)
+            and sum(a != b for a, b in zip(phrase, key)) == 1
+            and all(
+                a == b
+                or (
+                    len(a) >= TYPO_MIN_LETTERS
+                    and b not in self.protected
+                    and within_one_edit(a, b)
+                )
+                for a, b in zip(phrase, key)
+            )
+        }
+        return close.pop() if len(close) == 1 else None
+
     def mentions(self, instruction: str | list[str]) -> list[Mention]:
         """Return the landmarks an instruction names, in order, longest phrase first."""
         words = tokenize(instruction) if isinstance(instruction, str) else list(instruction)
         found, i = [], 0
         while i < len(words):
             for n in range(min(self.longest, len(words) - i), 1, -1):
-                key = tuple(words[i:i + n - 1]) + (singular(words[i + n - 1]),)
-                if key in self.phrases:
-                    found.append(Mention(self.phrases[key], i, i + n, tuple(words[i:i + n])))
+                kind = self.phrase_kind(tuple(words[i:i + n - 1]) + (singular(words[i + n - 1]),))
+                if kind is not None:
+                    found.append(Mention(kind, i, i + n, tuple(words[i:i + n])))
                     i += n
                     break
             else:
@@ -145,6 +166,7 @@ COMMON_WORDS = frozenset(
     west upper lower high low there here where then than them they what when which who
     start stop stay stand go move drive walk reach find get head navigate come turn park
     please robot should would could will can must just only then now same other another
+    direct directly exactly immediately right
     """.split()
 )
 # how a reference names its target and its landmarks, for choosing the kinds they become
@@ -165,6 +187,27 @@ RELATION_WORDS = frozenset(
 FILLER_WORDS = frozenset('the a an that which is'.split())
 
 
+def count_objects(grid: np.ndarray, kind: int) -> int:
+    """
+    Return how many landmarks of a kind a map holds: its 8-connected groups of cells.
+
+    A landmark drawn over several cells (a robot map's footprint) is one landmark.
+    """
+    left = {(int(r), int(c)) for r, c in np.argwhere(grid == kind)}
+    count = 0
+    while left:
+        count += 1
+        todo = [left.pop()]
+        while todo:
+            r, c = todo.pop()
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    if (r + dr, c + dc) in left:
+                        left.remove((r + dr, c + dc))
+                        todo.append((r + dr, c + dc))
+    return count
+
+
 @dataclass(frozen=True)
 class Translated:
     """A user's map and instruction in a model's own kinds and words."""
@@ -182,11 +225,11 @@ class Translation:
     The landmarks an instruction names become the model's landmark kinds, in order of
     mention; every other landmark becomes free ground, and the table's obstacles the
     model's obstacle. A named kind the model knows by its name keeps it. Another named kind
-    that the map holds more than once, that an extreme picks ("the westernmost chair") or
-    that a relation follows ("the chair closest to the sofa") becomes one of the model's
-    non-unique kinds (rock, tree, house, horse), the others one of its unique kinds
-    (star ... diamond): the roles those kinds played in its training. The instruction's
-    words are kept; only the names are replaced.
+    that the map holds more than once (touching cells are one landmark), that an extreme
+    picks ("the westernmost chair") or that a relation follows ("the chair closest to the
+    sofa") becomes one of the model's non-unique kinds (rock, tree, house, horse), the
+    others one of its unique kinds (star ... diamond): the roles those kinds played in its
+    training. The instruction's words are kept; only the names are replaced.
     """
 
     def __init__(self, table: EntityTable, model: EntityTable, unique, nonunique):
@@ -224,7 +267,7 @@ class Translation:
                     if same in pool:
                         pool.remove(same)
                 continue
-            pool = nonunique if self._many(m, words, int((grid == m.kind).sum())) else unique
+            pool = nonunique if self._many(m, words, count_objects(grid, m.kind)) else unique
             pool = pool or unique or nonunique  # more named kinds than the model has of a role
             if pool:
                 kinds[m.kind] = pool.pop(0)

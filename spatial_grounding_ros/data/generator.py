@@ -15,7 +15,8 @@ Worlds follow Janner et al.'s layout: grass with puddle patches, each unique obj
 (star ... diamond) at most once, non-unique ones (rock, tree, house, horse) whose number,
 like the puddles', grows with the map's area. Instructions use Janner et al.'s synthetic
 grammar, word for word as the world pickles' `instructions` phrase it, one *family* of
-relations at a time (FAMILIES). Every instruction names exactly one cell.
+relations at a time (FAMILIES). Every instruction names exactly one cell, and never a
+puddle: a robot is not sent onto an obstacle (data/unanswerable.py makes those cases).
 Row 0 is north: "above"/"top" is a smaller row index, "east"/"right" a larger column.
 """
 
@@ -177,14 +178,14 @@ def family_goals(grid: np.ndarray, family: str) -> list[tuple[str, tuple[int, in
     if family in FAMILY_OFFSETS:
         for name, (r, c) in _unique_cells(grid).items():
             for dr, dc in FAMILY_OFFSETS[family]:
-                if _inside(grid, r + dr, c + dc):
+                if _inside(grid, r + dr, c + dc) and grid[r + dr, c + dc] != PUDDLE:
                     out.append((local_phrase((dr, dc), name), (r + dr, c + dc)))
     elif family == 'extreme':
         out = [(f'reach {word} {name}', cell) for word, name, cell in _extremes(grid)]
     elif family == 'extreme-offset':
         for word, name, (r, c) in _extremes(grid):
             for (dr, dc), side in _SIDES.items():
-                if _inside(grid, r + dr, c + dc):
+                if _inside(grid, r + dr, c + dc) and grid[r + dr, c + dc] != PUDDLE:
                     out.append((f'reach the cell {side} the {word} {name}', (r + dr, c + dc)))
     elif family == 'closest':  # Euclidean, as in Janner's worlds (567 of their 589 agree)
         anchors = _unique_cells(grid)
@@ -230,7 +231,7 @@ def plant(
     if family == 'between':
         d = (0, 1) if rng.random() < 0.5 else (1, 0)
         cell_a, cell_b = (goal[0] - d[0], goal[1] - d[1]), (goal[0] + d[0], goal[1] + d[1])
-        if not (_inside(grid, *cell_a) and _inside(grid, *cell_b)):
+        if not (_inside(grid, *cell_a) and _inside(grid, *cell_b)) or grid[goal] == PUDDLE:
             return None
         relation = f'between {a} and {b}'
     elif family == 'row-col':
@@ -243,6 +244,7 @@ def plant(
         if (
             not (_inside(grid, *cell_a) and _inside(grid, *cell_b))
             or len({cell_a, cell_b, goal}) < 3
+            or grid[goal] == PUDDLE
         ):
             return None
         vertical = f'{_NUMBER[abs(dr)]} {"above" if dr < 0 else "below"}'

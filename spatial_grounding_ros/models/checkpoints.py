@@ -69,8 +69,18 @@ def write_checkpoint(
         'vocabulary': list(vocab.words),
         **info,
     }
-    torch.save({'header': header, 'state_dict': model.state_dict()}, path)
+    return _write(path, header, model.state_dict())
+
+
+def _write(path: Path, header: dict, state_dict: dict) -> Path:
+    torch.save({'header': header, 'state_dict': state_dict}, path)
     return path
+
+
+def rewrite_header(name: str | Path, **fields) -> Path:
+    """Set header fields of a grid checkpoint (a calibration, say), its weights as they are."""
+    path, header, state_dict = read_checkpoint(name, 'grid')
+    return _write(path, {**header, **fields}, state_dict)
 
 
 def save_checkpoint(

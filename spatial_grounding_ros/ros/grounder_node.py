@@ -359,10 +359,11 @@ class GrounderNode(LifecycleNode):
             stamp=self.map_msg.header.stamp,
             frame_id=self.map_msg.header.frame_id or self.param('default_frame_id'),
         )
-        # goal first: it is what a planner waits for
-        self.goal_pub.publish(
-            convert.cell_to_pose(result.goal, info, header.frame_id, header.stamp)
-        )
+        # goal first: it is what a planner waits for; a declined grounding sends none
+        if result.goal is not None:
+            self.goal_pub.publish(
+                convert.cell_to_pose(result.goal, info, header.frame_id, header.stamp)
+            )
         self.value_map_pub.publish(
             convert.value_map_to_occupancy_grid(
                 result.values, header, info, self.param('value_map_encoding')
@@ -372,6 +373,15 @@ class GrounderNode(LifecycleNode):
         self.relation_map_pub.publish(
             convert.magnitude_to_occupancy_grid(result.relation_map, header, info)
         )
+        if result.goal is None:
+            self.report(
+                'grounding',
+                DiagnosticStatus.WARN,
+                f'declined {result.instruction!r}: {result.reason}; no goal sent',
+                reason=result.reason,
+                confidence=f'{result.confidence:.3f}',
+            )
+            return
         message = f'grounded {result.instruction!r} at cell (row, col) {result.goal}'
         if result.unknown_words:
             message += f'; ignored unknown words {result.unknown_words}'
@@ -381,6 +391,7 @@ class GrounderNode(LifecycleNode):
             message,
             goal_row=result.goal[0],
             goal_col=result.goal[1],
+            confidence=f'{result.confidence:.3f}',
         )
 
     def report(self, part: str, level: bytes, message: str, **values) -> None:

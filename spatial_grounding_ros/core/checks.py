@@ -1,0 +1,198 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Why an instruction has no answer on a map, where the table and the map already say so.
+
+Each check reads the landmarks an instruction names (lexicon.Mention), the map and the
+words, and returns a reason or None:
+
+- `referent-missing: rock`: a named landmark is not on the map;
+- `unknown-landmark: fridge`: a word where a landmark's name goes is no kind of the table
+  and no word the model knows;
+- `off-map`: the cell named lies past the map's edge ("four below the house" on the row
+  above the bottom one);
+- `ambiguous: 3 rocks`: the one landmark named is one the map holds more than once, with
+  nothing that picks one ("below the rock", but not "below the westernmost rock" or "the
+  rock in the top row").
+
+- `goal-on-obstacle`: the one landmark named, held once, has its named offset on an
+  obstacle.
+
+The model's own doubt (`low-confidence`), and a goal it puts on an obstacle, are the
+grounder's to judge, after it has grounded.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .entities import EntityTable
+from .lexicon import COMMON_WORDS, EXTREME_WORDS, FILLER_WORDS, Mention, RELATION_WORDS
+
+NUMBERS = {
+    **{w: n for n, w in enumerate('one two three four five six seven eight nine ten'.split(), 1)},
+    **{str(n): n for n in range(1, 100)},
+}
+# one step in each direction a word names (row 0 is north)
+DIRECTIONS = {
+    **dict.fromkeys('above over up north top upper'.split(), (-1, 0)),
+    **dict.fromkeys('below under beneath underneath down south bottom lower'.split(), (1, 0)),
+    **dict.fromkeys('left west'.split(), (0, -1)),
+    **dict.fromkeys('right east'.split(), (0, 1)),
+    'northeast': (-1, 1),
+    'northwest': (-1, -1),
+    'southeast': (1, 1),
+    'southwest': (1, -1),
+}
+# direction words that describe a landmark when they stand right before its name
+ADJECTIVES = frozenset('left right top bottom upper lower'.split())
+# words before a name that pick one of several ("the left horse", "the second tree")
+QUALIFIERS = EXTREME_WORDS | frozenset(
+    'left right top bottom upper lower middle first second third last farthest furthest '
+    'closest nearest only single lone most northern southern eastern western upmost westmost '
+    'eastmost center centre central centermost middlemost another other'.split()
+)
+# words after a name that go on to say which one ("the rock in the top row", "near the tree")
+CLAUSES = RELATION_WORDS | frozenset('in on at of with that which by from farthest'.split())
+# words after a name that end its phrase
+PHRASE_ENDS = frozenset('and then please thanks now there here first'.split())
+# the map itself, never a landmark
+MAP_WORDS = frozenset('map grid board world field floor ground room'.split())
+# words before an unknown word that put it where a landmark's name goes
+BEFORE_A_NAME = frozenset(
+    'the a an of to with from near by beside between and reach closest nearest'.split()
+) | frozenset(DIRECTIONS)
+
+
+def offset_before(words: list[str], start: int, end: int) -> tuple[int, int]:
+    """
+    Sum the steps the words [start, end) say: "two to the right and one below" is (1, 2).
+
+    A number counts for the next direction word; a direction with no number is one step. A
+    word such as "left" right before the name ("the left horse") picks a landmark and is no
+    step.
+    """
+    said = [i for i in range(start, end) if words[i] not in FILLER_WORDS]
+    if said and words[said[-1]] in ADJECTIVES:
+        end = said[-1]
+    dr = dc = 0
+    count = None
+    for w in words[start:end]:
+        if w in NUMBERS:
+            count = NUMBERS[w]
+        elif w in DIRECTIONS:
+            n = 1 if count is None else count
+            dr, dc, count = dr + n * DIRECTIONS[w][0], dc + n * DIRECTIONS[w][1], None
+    return dr, dc
+
+
+def off_map(grid: np.ndarray, words: list[str], mentions: list[Mention]) -> bool:
+    """
+    Return whether a named offset from a landmark leaves the map from each of its cells.
+
+    The words before each mention (back to the previous one) are its offset: a row-and-column
+    reference ("one above the star and two to the right of the circle") checks the row of the
+    one and the column of the other.
+    """
+    h, w = grid.shape
+    previous = 0
+    for m in mentions:
+        dr, dc = offset_before(words, previous, m.start)
+        previous = m.end
+        if (dr, dc) == (0, 0):
+            continue
+        rows, cols = np.nonzero(grid == m.kind)
+        if not len(rows):
+            continue
+        inside = np.ones(len(rows), dtype=bool)
+        if dr:
+            inside &= (rows + dr >= 0) & (rows + dr < h)
+        if dc:
+            inside &= (cols + dc >= 0) & (cols + dc < w)
+        if not inside.any():
+            return True
+    return False
+
+
+def on_obstacle(
+    table: EntityTable, grid: np.ndarray, words: list[str], mentions: list[Mention]
+) -> bool:
+    """Return whether the one landmark named, held once, has its named offset on an obstacle."""
+    if len({m.kind for m in mentions}) != 1:
+        return False
+    cells = np.argwhere(grid == mentions[0].kind)
+    dr, dc = offset_before(words, 0, mentions[0].start)
+    if len(cells) != 1 or (dr, dc) == (0, 0):
+        return False
+    r, c = cells[0][0] + dr, cells[0][1] + dc
+    inside = 0 <= r < grid.shape[0] and 0 <= c < grid.shape[1]
+    return inside and int(grid[r, c]) in table.obstacles
+
+
+def _neighbour_words(words: list[str], m: Mention) -> tuple[list[str], list[str]]:
+    before = [w for w in words[:m.start] if w not in FILLER_WORDS][-1:]
+    after = [w for w in words[m.end:] if w not in FILLER_WORDS][:1]
+    return before, after
+
+
+def ambiguous(grid: np.ndarray, words: list[str], m: Mention, mentions: list[Mention]) -> bool:
+    """
+    Return whether the only landmark named is one the map holds more than once, unpicked.
+
+    With another landmark named, the two together usually pick one ("the heart to the left
+    of the horse"), so only a lone reference is judged.
+    """
+    if len({x.kind for x in mentions}) > 1 or int((grid == m.kind).sum()) < 2:
+        return False
+    before, after = _neighbour_words(words, m)
+    return not (set(before) & QUALIFIERS or set(after) & CLAUSES)
+
+
+def unknown_landmark(words: list[str], known, mentions: list[Mention]) -> str | None:
+    """
+    Return a word no table kind or known word covers where a landmark's name goes, or None.
+
+    That is a word after "the", "of", "to" and the like that ends its phrase: "below the
+    fridge", "the fridge closest to the tree", but not "the gray stone" or "kitty corner".
+    """
+    named = {i for m in mentions for i in range(m.start, m.end)}
+    for i, w in enumerate(words):
+        if i in named or w in known or w in COMMON_WORDS or w in NUMBERS or w in DIRECTIONS:
+            continue
+        if w in QUALIFIERS or w in CLAUSES or w in MAP_WORDS:
+            continue
+        ends = i + 1 == len(words) or words[i + 1] in CLAUSES | PHRASE_ENDS
+        if ends and i > 0 and words[i - 1] in BEFORE_A_NAME:
+            return w
+    return None
+
+
+def structural_reason(
+    table: EntityTable,
+    grid: np.ndarray,
+    words: list[str],
+    mentions: list[Mention],
+    known=frozenset(),
+) -> str | None:
+    """Return the first reason the table and the map give that no cell fits, or None."""
+    for m in mentions:
+        if m.kind in table.obstacles:
+            continue
+        if not (grid == m.kind).any():
+            return f'referent-missing: {table.names[m.kind]}'
+    word = unknown_landmark(words, known, mentions)
+    if word is not None:
+        return f'unknown-landmark: {word}'
+    if off_map(grid, words, mentions):
+        return 'off-map'
+    if on_obstacle(table, grid, words, mentions):
+        return 'goal-on-obstacle'
+    for m in mentions:
+        if m.kind not in table.obstacles and ambiguous(grid, words, m, mentions):
+            n = int((grid == m.kind).sum())
+            return f'ambiguous: {n} {table.names[m.kind]}s'
+    return None

@@ -1,0 +1,163 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The Python API's honest answers and tables of one's own, with the shipped default.
+
+Every decline reason on a map made by hand, confidence and alternatives, a table the model
+never saw (names, aliases, typos), the generated unanswerable cases, and the calibration
+arithmetic against values worked by hand.
+"""
+
+import math
+
+from conftest import REPO
+import numpy as np
+import pytest
+from spatial_grounding_ros.core.entities import EntityTable
+from spatial_grounding_ros.data.unanswerable import cases, KINDS, REASONS
+from spatial_grounding_ros.grounder import Grounder, REASONS as GROUNDER_REASONS
+from spatial_grounding_ros.studies.calibration import (
+    expected_calibration_error,
+    fit_temperature,
+    mean_nll,
+)
+
+OFFICE = REPO / 'config' / 'entities_office.yaml'
+ROCK, TREE, HOUSE, PUDDLE, STAR = 8, 9, 10, 1, 2
+
+
+@pytest.fixture(scope='module')
+def grounder() -> Grounder:
+    return Grounder.from_checkpoint()
+
+
+def pw_map() -> np.ndarray:
+    grid = np.zeros((12, 12), dtype=np.int64)
+    grid[3, 4] = ROCK
+    grid[5, 5] = TREE
+    grid[10, 2] = HOUSE
+    grid[7, 7] = STAR
+    grid[9:11, 7:10] = PUDDLE
+    return grid
+
+
+def test_a_clear_instruction_is_answered_with_confidence_and_alternatives(grounder):
+    g = grounder.ground(pw_map(), 'reach cell two below the rock')
+    assert g.reason is None and g.goal == g.best == (5, 4)
+    assert 0.5 < g.confidence <= 1
+    assert len(g.alternatives) == 3
+    scores = [g.confidence] + [p for _, p in g.alternatives]
+    assert scores == sorted(scores, reverse=True)
+    assert g.best not in [cell for cell, _ in g.alternatives]
+    assert g.landmarks == ['rock'] and g.referent == (3, 4)
+
+
+@pytest.mark.parametrize(
+    'instruction, reason',
+    [
+        ('reach cell two below the heart', 'referent-missing: heart'),
+        ('go to the fridge', 'unknown-landmark: fridge'),
+        ('reach cell two above the fridge please', 'unknown-landmark: fridge'),
+        ('reach cell three below the house', 'off-map'),
+        ('reach cell four to the left of the house', 'off-map'),
+        ('reach cell two above the star', None),
+        ('reach cell two below the star', 'goal-on-obstacle'),
+    ],
+)
+def test_each_reason_the_map_gives(grounder, instruction, reason):
+    g = grounder.ground(pw_map(), instruction)
+    assert g.reason == reason
+    assert (g.goal is None) == (reason is not None)
+
+
+def test_several_landmarks_named_as_one_are_ambiguous_unless_something_picks_one(grounder):
+    grid = pw_map()
+    grid[1, 1] = grid[6, 10] = ROCK
+    assert grounder.ground(grid, 'reach cell one below the rock').reason == 'ambiguous: 3 rocks'
+    assert grounder.ground(grid, 'reach cell one below the westernmost rock').reason is None
+    assert grounder.ground(grid, 'reach the rock closest to the tree').reason is None
+
+
+def test_a_grounding_less_sure_than_the_minimum_declines():
+    strict = Grounder.from_checkpoint(min_confidence=0.999)
+    g = strict.ground(pw_map(), 'reach the cell near the tree and the house')
+    assert g.goal is None and g.reason_code == 'low-confidence'
+    assert g.reason_code in GROUNDER_REASONS
+    with pytest.raises(ValueError, match='min_confidence'):
+        Grounder.from_checkpoint(min_confidence=1.5)
+
+
+@pytest.mark.parametrize('size', [10, 32])
+@pytest.mark.parametrize('kind', KINDS)
+def test_generated_unanswerable_cases_are_declined_with_their_reason(grounder, kind, size):
+    found = [grounder.ground(g, t).reason_code for g, t in cases(kind, size, 25, seed=7)]
+    assert np.mean([r == REASONS[kind] for r in found]) >= 0.9, found
+
+
+def office_map() -> tuple[EntityTable, np.ndarray]:
+    table = EntityTable.from_yaml(OFFICE)
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[0, :] = table.index('wall')
+    grid[4, 3] = table.index('sofa')
+    grid[7, 8] = table.index('fridge')
+    grid[2, 6] = table.index('coffee_machine')
+    grid[8, 1] = grid[2, 2] = table.index('chair')
+    return table, grid
+
+
+@pytest.mark.parametrize(
+    'instruction, goal',
+    [
+        ('reach cell two below the sofa', (6, 3)),
+        ('Please go two cells below the couch.', (6, 3)),  # an alias, words of its own
+        ('reach cell two below the sfoa', (6, 3)),  # a typo
+        ('reach the cell one above the refrigerator', (6, 8)),
+        ('reach cell with the espresso maker', (2, 6)),  # an alias of two words
+        ('reach cell with the cofee machine', (2, 6)),  # a typo in a name of two words
+        ('reach the southernmost chair', (8, 1)),
+        ('reach the chairs closest to the sofa', (2, 2)),
+    ],
+)
+def test_a_table_the_model_never_saw_grounds_without_retraining(instruction, goal):
+    table, grid = office_map()
+    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    assert (g.reason, g.goal) == (None, goal), g.model_instruction
+
+
+def test_a_table_of_ones_own_declines_what_it_lacks():
+    table, grid = office_map()
+    office = Grounder.from_checkpoint(entities=table)
+    assert office.ground(grid, 'reach cell two below the printer').reason == (
+        'referent-missing: printer'
+    )
+    assert office.ground(grid, 'reach cell two below the piano').reason == (
+        'unknown-landmark: piano'
+    )
+    with pytest.raises(ValueError, match='outside the office table'):
+        office.ground(np.full((4, 4), 99), 'reach the sofa')
+
+
+def test_expected_calibration_error_by_hand():
+    # bin 0.9-1.0: confidences 0.95, 0.95 with one right: |0.95 - 0.5| = 0.45, weight 2/4;
+    # bin 0.6-0.7: 0.65, 0.65 both right: |0.65 - 1| = 0.35, weight 2/4
+    got = expected_calibration_error([0.95, 0.95, 0.65, 0.65], [1, 0, 1, 1])
+    assert got == pytest.approx(0.5 * 0.45 + 0.5 * 0.35)
+    assert expected_calibration_error([1.0, 0.0], [1, 0]) == 0
+
+
+def test_the_fitted_temperature_recovers_the_one_that_drew_the_goals():
+    rng = np.random.default_rng(0)
+    scored = []
+    for _ in range(400):
+        flat = rng.normal(0, 1, 20)
+        p = np.exp(flat / 0.5)
+        scored.append((flat, int(rng.choice(20, p=p / p.sum()))))
+    t = fit_temperature(scored)
+    assert t == pytest.approx(0.5, rel=0.25)
+    assert mean_nll(scored, t) <= mean_nll(scored, 1.0)
+    # one map, one goal: the likelihood of a uniform map is log 20 at any temperature
+    assert mean_nll([(np.zeros(20), 3)], 0.1) == pytest.approx(math.log(20))
