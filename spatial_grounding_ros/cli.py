@@ -245,17 +245,20 @@ def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, bags, the suite, ShapeWorld's, robustness, explain, and the closed-loop demo, which
-    needs rclpy (without it, every other subcommand still works).
+    bench, bags, the suite, honest answers and calibration, ShapeWorld's, robustness, explain,
+    and the closed-loop demo, which needs rclpy (without it, every other subcommand still
+    works).
     """
     from .data import bags
     from .shapeworld import commands as shapeworld
-    from .studies import bench, explain, robustness, suite
+    from .studies import bench, calibration, explain, honesty, robustness, suite
 
     found = [
         functools.partial(bench.register_cli, ros_latency=ros_round_trip_latency),
         bags.register_cli,
         suite.register_cli,
+        honesty.register_cli,
+        calibration.register_cli,
         shapeworld.register_cli,
         robustness.register_cli,
         explain.register_cli,

@@ -89,23 +89,24 @@ def test_the_four_extremes_pick_the_right_rock(grounder, size):
         assert grounder.ground(grid, f'reach {word} rock').goal == cell, word
 
 
-# Minimum exact-goal rate per family on 30 fresh generated 10x10 worlds each (the suite's
-# worlds, another seed than the docs' table). The shipped default scores 1.0 on every
-# local family, extreme and extreme-offset, 0.97 on between, 0.93 on row-col and 0.90 on
-# closest (its weakest); the floors leave room for a few argmax flips on another CPU and
-# fail a model that regresses (the default before the far relation: 0.83 closest, 0.73
-# row-col; the one before the clear-references work: 0.0 to 0.37).
+# Minimum exact-goal rate per family on 200 fresh generated 10x10 worlds each (the suite's
+# worlds, another seed than the docs' table), one map at a time through the Grounder. The
+# shipped default scores 1.0 on every local family, extreme and between, 0.995 on
+# extreme-offset, 0.93 on row-col and 0.87 on closest (its weakest). Each floor sits about
+# three binomial standard deviations below (0.87 +- 0.024 over 200 worlds), so a few argmax
+# flips on another CPU pass and a model that regresses fails (the default before the far
+# relation: 0.83 closest, 0.73 row-col; the one before the clear-references work: 0.0-0.37).
 FLOOR = {
-    **{f: 0.9 for f in LOCAL_FAMILIES},
-    'extreme': 0.9,
-    'closest': 0.8,
-    'extreme-offset': 0.9,
+    **{f: 0.95 for f in LOCAL_FAMILIES},
+    'extreme': 0.95,
+    'closest': 0.78,
+    'extreme-offset': 0.95,
     'row-col': 0.85,
-    'between': 0.9,
+    'between': 0.95,
 }
 
 
 def test_every_family_hits_on_generated_worlds():
-    result = suite.run_suite('pw_t-rnet-attn', sizes=(10,), n=30, seed=123, progress=False)
+    result = suite.run_suite('pw_t-rnet-attn', sizes=(10,), n=200, seed=123, progress=False)
     low = {f: v['10']['hit'] for f, v in result['families'].items() if v['10']['hit'] < FLOOR[f]}
     assert not low, f'families under their floor: {low}'

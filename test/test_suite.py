@@ -32,27 +32,30 @@ def run(*args):
 
 
 def test_suite_hit_and_md_are_the_grounders_answers(tmp_path):
-    """Recompute hit and MD per family with Grounder.ground, one world at a time."""
+    """Recompute hit, MD and declines per family with Grounder.ground, one world at a time."""
     result = suite.run_suite(
         'pw-local_t-cnn', sizes=(7, 12), n=4, seed=5, out=tmp_path, progress=False
     )
     grounder = Grounder.from_checkpoint('pw-local_t-cnn')
-    all_d = []
+    all_d, all_hits = [], []
     for family in FAMILIES:
         for size in (7, 12):
-            d = [
-                abs(grounder.ground(g, t).goal[0] - goal[0])
-                + abs(grounder.ground(g, t).goal[1] - goal[1])
-                for g, t, goal in suite.suite_worlds(family, size, 4, 5)
-            ]
+            worlds = suite.suite_worlds(family, size, 4, 5)
+            found = [(grounder.ground(g, t), goal) for g, t, goal in worlds]
+            d = [abs(r.best[0] - goal[0]) + abs(r.best[1] - goal[1]) for r, goal in found]
+            hits = [r.goal == tuple(goal) for r, goal in found]
+            declined = [r.goal is None for r, _ in found]
             got = result['families'][family][str(size)]
-            assert got == {'hit': np.mean(np.array(d) == 0), 'md': np.mean(d), 'n': 4}, (
-                family,
-                size,
-            )
+            assert got == {
+                'hit': np.mean(hits),
+                'md': np.mean(d),
+                'declined': np.mean(declined),
+                'n': 4,
+            }, (family, size)
             all_d += d
+            all_hits += hits
     assert result['n'] == len(all_d) == 2 * 4 * len(FAMILIES)
-    assert result['hit'] == pytest.approx(np.mean(np.array(all_d) == 0))
+    assert result['hit'] == pytest.approx(np.mean(all_hits))
     assert result['md'] == pytest.approx(np.mean(all_d))
     assert set(result['groups']) == {'local', 'global', 'compositional'}
     written = json.loads((tmp_path / 'suite.json').read_text())

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from ..core.entities import PUDDLEWORLD
+from ..core.entities import EntityTable, PUDDLEWORLD
 from ..data.generator import (
     COMPOSITIONAL_FAMILIES,
     FAMILIES,
@@ -34,7 +34,8 @@ from ..data.generator import (
     LOCAL_FAMILIES,
     sample,
 )
-from ..grounder import Grounder
+from ..data.renaming import NAMINGS, rename
+from ..grounder import Grounder, resolve_table
 from ..models.checkpoints import load_checkpoint
 from ..training.options import ranged
 
@@ -46,17 +47,41 @@ GROUPS = {
 DEFAULT_SIZES = (10, 32, 64)
 
 
-def suite_worlds(family: str, size: int, n: int, seed: int):
-    """Return n (grid, instruction, goal) of one family and size; the same for every model."""
+def suite_worlds(
+    family: str,
+    size: int,
+    n: int,
+    seed: int,
+    table: EntityTable = PUDDLEWORLD,
+    naming: str = 'name',
+):
+    """
+    Return n (grid, instruction, goal) of one family and size; the same for every model.
+
+    In another `table`, the same layouts and goals with its kinds, named by `naming`
+    (data/renaming.py: the name, an alias, or a typo of the name).
+    """
     rng = np.random.default_rng([seed, size, FAMILIES.index(family)])
-    return [sample(rng, family, size) for _ in range(n)]
+    worlds = [sample(rng, family, size) for _ in range(n)]
+    if table.names == PUDDLEWORLD.names and naming == 'name':
+        return worlds
+    renamer = np.random.default_rng([seed, size, FAMILIES.index(family), 1])
+    return [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
 
 
 def _summary(distances: list[int]) -> dict:
-    d = np.asarray(distances)
+    """
+    Hit, MD and the share declined, of distances from the best cell to the named one.
+
+    A declined grounding's distance is stored negative (-1 - d): it sends no goal, so it is no
+    hit, and its MD is its best cell's.
+    """
+    raw = np.asarray(distances)
+    d = np.where(raw < 0, -1 - raw, raw)
     return {
-        'hit': float(np.mean(d == 0)) if len(d) else None,
+        'hit': float(np.mean(raw == 0)) if len(d) else None,
         'md': float(np.mean(d)) if len(d) else None,
+        'declined': float(np.mean(raw < 0)) if len(d) else None,
         'n': int(len(d)),
     }
 
@@ -70,8 +95,15 @@ def run_suite(
     out: str | Path | None = None,
     failures_shown: int = 6,
     progress: bool = True,
+    entities: str | Path | EntityTable | None = None,
+    naming: str = 'name',
 ) -> dict:
-    """Hit and MD per family and size, per group and size, per size, and overall."""
+    """
+    Hit and MD per family and size, per group and size, per size, and overall.
+
+    `entities`: a table of one's own (a YAML path): the worlds are renamed into it
+    (suite_worlds) and grounded with it.
+    """
     if not sizes or min(sizes) < 5:
         raise ValueError(
             f"suite sizes must be >= 5 (the generator's smallest world), got {list(sizes)}"
@@ -79,26 +111,30 @@ def run_suite(
     if n < 1:
         raise ValueError(f'--n must be at least 1, got {n}')
     loaded = load_checkpoint(checkpoint, expect_entities=PUDDLEWORLD)
-    grounder = Grounder(loaded)
+    table = resolve_table(entities) or PUDDLEWORLD
+    grounder = Grounder(loaded, table)
     distances = {f: {} for f in families}
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
     for family, size in tqdm(jobs, desc='suite', disable=not progress, unit='family'):
-        worlds = suite_worlds(family, size, n, seed)
+        worlds = suite_worlds(family, size, n, seed, table, naming)
         grids = np.stack([w[0] for w in worlds])
         texts = [w[1] for w in worlds]
         goals = np.array([w[2] for w in worlds])
         groundings = [grounder.ground(g, t) for g, t in zip(grids, texts)]
         maps = np.stack([g.values for g in groundings])
-        pred = np.array([g.goal for g in groundings])
+        pred = np.array([g.best for g in groundings])
         d = np.abs(pred - goals).sum(1)
-        distances[family][size] = d.tolist()
-        for i in np.flatnonzero(d)[:failures_shown]:
+        declined = np.array([g.goal is None for g in groundings])
+        distances[family][size] = np.where(declined, -1 - d, d).tolist()
+        for i in np.flatnonzero(d | declined)[:failures_shown]:
             failures[family].append(
                 (size, grids[i], texts[i], tuple(goals[i]), tuple(pred[i]), maps[i])
             )
     result = {
         'checkpoint': str(checkpoint),
+        'entities': table.domain,
+        'naming': naming,
         'model': loaded.name,
         'seed': seed,
         'n_per_family': n,
@@ -121,11 +157,11 @@ def run_suite(
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         (out / 'suite.json').write_text(json.dumps(result, indent=1) + '\n')
-        result['failure_plots'] = [str(p) for p in plot_failures(out, failures)]
+        result['failure_plots'] = [str(p) for p in plot_failures(out, failures, table)]
     return result
 
 
-def plot_failures(out: Path, failures: dict) -> list[Path]:
+def plot_failures(out: Path, failures: dict, table: EntityTable = PUDDLEWORLD) -> list[Path]:
     """
     One PNG per family with failures.
 
@@ -140,14 +176,14 @@ def plot_failures(out: Path, failures: dict) -> list[Path]:
             continue
         fig, axes = plt.subplots(len(cases), 2, figsize=(8, 4 * len(cases)), squeeze=False)
         for (size, grid, text, goal, pred, values), (ax_map, ax_val) in zip(cases, axes):
-            ax_map.imshow(grid == 1, cmap='Blues', vmin=0, vmax=2)
+            ax_map.imshow(np.isin(grid, table.obstacles), cmap='Blues', vmin=0, vmax=2)
             if size <= 32:
                 for (r, c), e in np.ndenumerate(grid):
-                    if e > 1:
+                    if e > 0 and e not in table.obstacles:
                         ax_map.text(
                             c,
                             r,
-                            PUDDLEWORLD.names[e][:3],
+                            table.names[e][:3],
                             ha='center',
                             va='center',
                             fontsize=max(3, 70 // size),
@@ -199,13 +235,15 @@ def cmd_suite(args) -> int:
         tuple(args.families),
         args.out,
         progress=not args.json,
+        entities=args.entities,
+        naming=args.naming,
     )
     if args.json:
         print(json.dumps(result))
         return 0
     print(
         f'{result["model"]} ({args.checkpoint}), {args.n} worlds per family and size, '
-        f'seed {args.seed}'
+        f'seed {args.seed}, {result["entities"]} table, landmarks named by {args.naming}'
     )
     print(f'{"family":16s}' + ''.join(f'{s:>16s}' for s in result['sizes']))
     for family, per_size in result['families'].items():
@@ -232,6 +270,18 @@ def register_cli(sub) -> None:
     p.add_argument('--n', type=ranged(int, low=1), default=100, help='worlds per family and size')
     p.add_argument('--seed', type=ranged(int, low=0), default=0)
     p.add_argument('--families', nargs='+', default=list(FAMILIES), choices=FAMILIES)
+    p.add_argument(
+        '--entities',
+        default=None,
+        help='an entity table of your own (YAML): the worlds are renamed into its kinds',
+    )
+    p.add_argument(
+        '--naming',
+        default='name',
+        choices=NAMINGS,
+        help="how instructions name the landmarks: the table's names, its aliases, or a "
+        'one-letter typo of the names',
+    )
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.add_argument('--out', default=None, help='write suite.json and failure PNGs here')
     p.set_defaults(func=cmd_suite)
