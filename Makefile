@@ -6,11 +6,15 @@ PY := $(VENV)/bin/python
 DATA ?=
 DATA_ARG := $(if $(DATA),--data $(DATA))
 STAMP := $(VENV)/.installed
+# the interface package (GroundInstruction.srv) built into the venv (tools/build_interfaces.sh)
+INTERFACES := $(VENV)/.interfaces
+INTERFACE_FILES := $(wildcard interfaces/spatial_grounding_interfaces/*.* \
+	interfaces/spatial_grounding_interfaces/srv/*.srv)
 
 .PHONY: setup demo lint test test-fast reproduce reproduce-suite reproduce-ablation reproduce-rl \
 	reproduce-shapeworld reproduce-robustness bench clean
 
-setup: $(STAMP)
+setup: $(INTERFACES)
 
 $(STAMP): requirements.txt setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -19,44 +23,48 @@ $(STAMP): requirements.txt setup.py
 	$(PY) -m pip install --quiet --no-deps -e .
 	touch $(STAMP)
 
-demo: $(STAMP)
+$(INTERFACES): $(STAMP) $(INTERFACE_FILES) tools/build_interfaces.sh tools/fix_ros_wheels.py
+	tools/build_interfaces.sh $(VENV)
+	touch $(INTERFACES)
+
+demo: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding demo --out demo_out
 
 # the ament linters over the package, launch files and tests, as test/test_flake8.py and
 # test/test_pep257.py run them
-lint: $(STAMP)
+lint: $(INTERFACES)
 	$(VENV)/bin/ament_flake8
 	$(VENV)/bin/ament_pep257 . test
 
-test: $(STAMP)
+test: $(INTERFACES)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q test
 
 # the tests marked fast (test/conftest.py's FAST, or @pytest.mark.fast): under a minute on
 # 2 cores; `make test` runs them all
-test-fast: $(STAMP)
+test-fast: $(INTERFACES)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q -m fast test
 
-reproduce: $(STAMP)
+reproduce: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce $(DATA_ARG) --out results
 
 # The reference suite on the shipped PuddleWorld checkpoints (make reproduce runs it too):
 # results/suite.json, results/suite.md
-reproduce-suite: $(STAMP)
+reproduce-suite: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce --suite-only --out results
 
 # Each change of the clear-references recipe off in turn (about 25 minutes on 2 cores):
 # results/ablation.json, results/ablation.md
-reproduce-ablation: $(STAMP)
+reproduce-ablation: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce --ablation $(DATA_ARG) --out results
 
 # RL rows of the paper's table (about an hour on 2 cores): results/rl.json, results/rl.md
-reproduce-rl: $(STAMP)
+reproduce-rl: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce-rl $(DATA_ARG) --out results
 
 # ShapeWorld (generated, cached in ~/.cache/spatial_grounding_ros): trains t-VGG and t-RNetAttn
 # one after the other, one thread each, ships their checkpoints, evaluates them clean and under
 # noise: results/shapeworld.json, results/shapeworld.md, results/shapeworld_noise.md
-reproduce-shapeworld: $(STAMP)
+reproduce-shapeworld: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce-shapeworld --out results
 
 # The robustness study on the shipped checkpoints (t-RNetAttn, t-RNet, t-CNN where shipped;
@@ -64,13 +72,13 @@ reproduce-shapeworld: $(STAMP)
 # README's explain figures of the node's default (PW local test examples 6 and 41, and 6
 # under noise)
 EXPLAIN := $(VENV)/bin/spatial-grounding explain --checkpoint pw_t-rnet-attn --task pw-local $(DATA_ARG)
-reproduce-robustness: $(STAMP)
+reproduce-robustness: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce-robustness $(DATA_ARG) --out results
 	$(EXPLAIN) --index 6 --out results/explain_success.png
 	$(EXPLAIN) --index 41 --out results/explain_failure.png
 	$(EXPLAIN) --index 6 --obs-noise 10 --text-noise 3 --out results/explain_noise.png
 
-bench: $(STAMP)
+bench: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding bench --out results/bench.json
 
 clean:
