@@ -42,6 +42,7 @@ setup(
             'spatial-grounding = spatial_grounding_ros.cli:main',
             'grounder = spatial_grounding_ros.ros.grounder_node:main',
             'gridworld = spatial_grounding_ros.ros.gridworld_node:main',
+            'entity_mapper = spatial_grounding_ros.ros.entity_mapper_node:main',
         ]
     },
 )
