@@ -251,12 +251,13 @@ def _extensions():
     """
     from .data import bags
     from .shapeworld import commands as shapeworld
-    from .studies import bench, calibration, explain, honesty, robustness, suite
+    from .studies import bench, calibration, explain, ground, honesty, robustness, suite
 
     found = [
         functools.partial(bench.register_cli, ros_latency=ros_round_trip_latency),
         bags.register_cli,
         suite.register_cli,
+        ground.register_cli,
         honesty.register_cli,
         calibration.register_cli,
         shapeworld.register_cli,

@@ -12,6 +12,7 @@ never saw (names, aliases, typos), the generated unanswerable cases, and the cal
 arithmetic against values worked by hand.
 """
 
+import json
 import math
 
 from conftest import REPO
@@ -161,3 +162,22 @@ def test_the_fitted_temperature_recovers_the_one_that_drew_the_goals():
     assert mean_nll(scored, t) <= mean_nll(scored, 1.0)
     # one map, one goal: the likelihood of a uniform map is log 20 at any temperature
     assert mean_nll([(np.zeros(20), 3)], 0.1) == pytest.approx(math.log(20))
+
+
+def test_the_ground_command_answers_and_draws_a_map_of_ones_own(tmp_path, capsys):
+    from spatial_grounding_ros import cli
+
+    argv = ['ground', '--entities', str(OFFICE), '--map', str(REPO / 'docs/examples/office.txt')]
+    png = tmp_path / 'g.png'
+    assert cli.main(argv + ['--instruction', 'reach the westernmost chair', '--out', str(png),
+                            '--json']) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got['goal'] == [3, 1] and got['reason'] is None and got['landmarks'] == ['chair']
+    assert png.stat().st_size > 10_000
+    assert cli.main(argv + ['--instruction', 'reach cell two below the desk', '--json']) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got['goal'] is None and got['reason'] == 'ambiguous: 2 desks'
+    bad = tmp_path / 'bad.txt'
+    bad.write_text('0 1\n2\n')
+    assert cli.main(['ground', '--map', str(bad), '--instruction', 'reach the rock']) == 2
+    assert 'rows of equal length' in capsys.readouterr().err

@@ -31,7 +31,14 @@ from __future__ import annotations
 import numpy as np
 
 from .entities import EntityTable
-from .lexicon import COMMON_WORDS, EXTREME_WORDS, FILLER_WORDS, Mention, RELATION_WORDS
+from .lexicon import (
+    COMMON_WORDS,
+    count_objects,
+    EXTREME_WORDS,
+    FILLER_WORDS,
+    Mention,
+    RELATION_WORDS,
+)
 
 NUMBERS = {
     **{w: n for n, w in enumerate('one two three four five six seven eight nine ten'.split(), 1)},
@@ -146,7 +153,7 @@ def ambiguous(grid: np.ndarray, words: list[str], m: Mention, mentions: list[Men
     With another landmark named, the two together usually pick one ("the heart to the left
     of the horse"), so only a lone reference is judged.
     """
-    if len({x.kind for x in mentions}) > 1 or int((grid == m.kind).sum()) < 2:
+    if len({x.kind for x in mentions}) > 1 or count_objects(grid, m.kind) < 2:
         return False
     before, after = _neighbour_words(words, m)
     return not (set(before) & QUALIFIERS or set(after) & CLAUSES)
@@ -193,6 +200,6 @@ def structural_reason(
         return 'goal-on-obstacle'
     for m in mentions:
         if m.kind not in table.obstacles and ambiguous(grid, words, m, mentions):
-            n = int((grid == m.kind).sum())
+            n = count_objects(grid, m.kind)
             return f'ambiguous: {n} {table.names[m.kind]}s'
     return None

@@ -23,6 +23,7 @@ import numpy as np
 
 from .generator import FAMILY_OFFSETS, local_phrase, PUDDLE, random_grid, sample
 from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from ..core.lexicon import count_objects
 
 GRASS = 0
 # the reason each kind of case should be declined with
@@ -96,7 +97,8 @@ def ambiguous(rng: np.random.Generator, size: int):
         for r, c in zip(*np.nonzero(grid == kind))
         if 0 <= r + dr < size and 0 <= c + dc < size
     ]
-    while len(inside) < 2:  # two copies at least, both with the offset inside the map
+    # two copies at least, apart (touching cells are one landmark), with the offset inside
+    while len(inside) < 2 or count_objects(grid, kind) < 2:
         r, c = int(rng.integers(max(0, -dr), size - max(0, dr))), int(
             rng.integers(max(0, -dc), size - max(0, dc))
         )

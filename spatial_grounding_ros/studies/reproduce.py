@@ -27,12 +27,15 @@ import torch
 from .results import merge_rows
 from ..core.tasks import RL_TASKS, TASKS
 from ..data.datasets import load_task
+from ..data.renaming import NAMINGS
 from ..models.checkpoints import load_checkpoint, PACKAGED_DIR
 from ..training.rl import RLConfig, train_rl
 from ..training.supervised import evaluate, train_supervised, TrainConfig
 
 SHIPPED = ('t-rnet-attn', 't-rnet', 't-cnn')
 # The suite table's columns: the node's default first, then the per-task checkpoints.
+# a table of a robot's own that no checkpoint was trained on (the source tree's config/)
+LANDMARKS_TABLE = Path(__file__).resolve().parents[2] / 'config' / 'entities_office.yaml'
 SUITE_CHECKPOINTS = (
     'pw_t-rnet-attn',
     'pw_t-cnn',
@@ -141,6 +144,16 @@ def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int
     }
     (out / 'suite.json').write_text(json.dumps({'meta': meta, 'runs': results}, indent=1) + '\n')
     (out / 'suite.md').write_text(suite.markdown_table(results))
+    # the default on a table it never saw, its landmarks named by name, alias and typo
+    own = {
+        f'{LANDMARKS_TABLE.stem} ({naming})': suite.run_suite(
+            SUITE_CHECKPOINTS[0], sizes, n, seed, entities=LANDMARKS_TABLE, naming=naming
+        )
+        for naming in NAMINGS
+    }
+    meta = {**meta, 'checkpoint': SUITE_CHECKPOINTS[0], 'entities': str(LANDMARKS_TABLE.name)}
+    (out / 'landmarks.json').write_text(json.dumps({'meta': meta, 'runs': own}, indent=1) + '\n')
+    (out / 'landmarks.md').write_text(suite.markdown_table(own))
     return results
 
 
