@@ -29,6 +29,7 @@ from .core.checks import structural_reason
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
+from .core.wording import canonical, drop_unknown, wording_words
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 
@@ -131,7 +132,7 @@ class Grounder:
                 f'the {self.entities.domain} table needs a PuddleWorld model'
             )
         self.lexicon = self.translation.lexicon if self.translation else Lexicon(self.entities)
-        self.known = frozenset(self.vocab.words[2:])
+        self.known = frozenset(self.vocab.words[2:]) | wording_words()
         # calibration: confidence is the softmax of the values at this temperature
         self.temperature = float(loaded.header.get('calibration', {}).get('temperature', 1.0))
         self.model.eval()
@@ -206,6 +207,7 @@ class Grounder:
             mentions = list(translated.mentions)
         else:
             model_grid, model_text, mentions = grid, instruction, self.lexicon.mentions(words)
+        model_text = self.reword(model_text)
         values, aux = self.model.ground(
             torch.as_tensor(model_grid)[None], self.text_code(model_text), return_aux=True
         )
@@ -234,6 +236,18 @@ class Grounder:
             referent=nearest_cell(grid, [m.kind for m in mentions], best),
             model_instruction=model_text,
         )
+
+    def reword(self, text: str) -> str:
+        """
+        Return an instruction in the words the model learned (core/wording.py).
+
+        Other wordings of a relation, a unit or a verb become the model's, filler goes, and
+        so does every word the model never saw, so that none can move the goal. The model's
+        own landmark names are never reworded.
+        """
+        words = tokenize(text)
+        names = [i for i, w in enumerate(words) if w in self.model_entities.names]
+        return ' '.join(drop_unknown(canonical(words, names), self.vocab.index))
 
     def judge(self, values: np.ndarray):
         """Return the best cell, its calibrated probability, and the next best with theirs."""

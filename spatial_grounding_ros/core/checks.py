@@ -61,7 +61,8 @@ ADJECTIVES = frozenset('left right top bottom upper lower'.split())
 QUALIFIERS = EXTREME_WORDS | frozenset(
     'left right top bottom upper lower middle first second third last farthest furthest '
     'closest nearest only single lone most northern southern eastern western upmost westmost '
-    'eastmost center centre central centermost middlemost another other'.split()
+    'eastmost center centre central centermost middlemost another other leftmost rightmost '
+    'topmost uppermost bottommost lowermost highest lowest west east north south'.split()
 )
 # words after a name that go on to say which one ("the rock in the top row", "near the tree")
 CLAUSES = RELATION_WORDS | frozenset('in on at of with that which by from farthest'.split())

@@ -13,9 +13,10 @@ Three measurements, each one map at a time through Grounder.ground (the node's p
   share declined, and the share declined with the right reason;
 - the reference suite's clear instructions: the share declined, and the exact-goal rate
   (a declined one counts as a miss);
-- the human PuddleWorld test splits: the share declined, the exact-goal rate of the answers
-  given and of all, and how well calibrated the confidence is: the expected calibration error
-  of the answers given, on the suite and the human splits together (and apart).
+- the human PuddleWorld test splits: the share declined, the best cell's MD and exact-goal
+  rate, the exact-goal rate of the answers given and of all, and how well calibrated the
+  confidence is: the expected calibration error of the answers given, on the suite and the
+  human splits together (and apart).
 
     spatial-grounding honesty --out results     # results/honesty.json, results/honesty.md
 """
@@ -57,8 +58,13 @@ def answered(groundings, goals) -> dict:
     """Decline rate, hit rates, and what calibration needs, of groundings and their goals."""
     hits = np.array([g.best == tuple(goal) for g, goal in zip(groundings, goals)])
     given = np.array([g.goal is not None for g in groundings])
+    distance = [
+        abs(g.best[0] - goal[0]) + abs(g.best[1] - goal[1]) for g, goal in zip(groundings, goals)
+    ]
     return {
         'n': len(groundings),
+        'md_best': float(np.mean(distance)),
+        'hit_best': float(hits.mean()),
         'declined': float(1 - given.mean()),
         'hit_all': float((hits & given).mean()),
         'hit_answered': float(hits[given].mean()) if given.any() else None,
@@ -139,8 +145,9 @@ def markdown(result: dict) -> str:
         lines.append(f'| {kind} | `{REASONS[kind]}` | ' + ' | '.join(cells) + ' |')
     lines += [
         '',
-        '| clear or human | n | declined | hit of all | hit of the answers | reasons given |',
-        '| --- | --- | --- | --- | --- | --- |',
+        '| clear or human | n | declined | hit of all | hit of the answers | best cell: MD / hit '
+        '| reasons given |',
+        '| --- | --- | --- | --- | --- | --- | --- |',
     ]
     rows = [(f'suite {s}x{s}', r) for s, r in result['suite'].items()]
     rows += [(f'{t} test', r) for t, r in result.get('human', {}).items()]
@@ -148,7 +155,7 @@ def markdown(result: dict) -> str:
         answered_hit = '-' if r['hit_answered'] is None else f'{r["hit_answered"]:.1%}'
         lines.append(
             f'| {name} | {r["n"]} | {r["declined"]:.1%} | {r["hit_all"]:.1%} | {answered_hit} | '
-            + (', '.join(r['reasons']) or '-') + ' |'
+            f'{r["md_best"]:.2f} / {r["hit_best"]:.1%} | ' + (', '.join(r['reasons']) or '-') + ' |'
         )
     lines += ['', 'Expected calibration error of the answers given (10 bins): '
               + ', '.join(f'{k} {v:.3f}' for k, v in result['ece'].items()) + '.']

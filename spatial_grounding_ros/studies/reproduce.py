@@ -146,10 +146,16 @@ def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int
     (out / 'suite.md').write_text(suite.markdown_table(results))
     # the default on a table it never saw, its landmarks named by name, alias and typo
     own = {
-        f'{LANDMARKS_TABLE.stem} ({naming})': suite.run_suite(
-            SUITE_CHECKPOINTS[0], sizes, n, seed, entities=LANDMARKS_TABLE, naming=naming
+        f'{LANDMARKS_TABLE.stem} ({naming}, {wording})': suite.run_suite(
+            SUITE_CHECKPOINTS[0],
+            sizes,
+            n,
+            seed,
+            entities=LANDMARKS_TABLE,
+            naming=naming,
+            wording=wording,
         )
-        for naming in NAMINGS
+        for naming, wording in [*((n, 'plain') for n in NAMINGS), ('alias', 'paraphrase')]
     }
     meta = {**meta, 'checkpoint': SUITE_CHECKPOINTS[0], 'entities': str(LANDMARKS_TABLE.name)}
     (out / 'landmarks.json').write_text(json.dumps({'meta': meta, 'runs': own}, indent=1) + '\n')

@@ -34,6 +34,7 @@ from ..data.generator import (
     LOCAL_FAMILIES,
     sample,
 )
+from ..data.paraphrase import paraphrase
 from ..data.renaming import NAMINGS, rename
 from ..grounder import Grounder, resolve_table
 from ..models.checkpoints import load_checkpoint
@@ -45,6 +46,7 @@ GROUPS = {
     'compositional': COMPOSITIONAL_FAMILIES,
 }
 DEFAULT_SIZES = (10, 32, 64)
+WORDINGS = ('plain', 'paraphrase')
 
 
 def suite_worlds(
@@ -54,19 +56,27 @@ def suite_worlds(
     seed: int,
     table: EntityTable = PUDDLEWORLD,
     naming: str = 'name',
+    wording: str = 'plain',
 ):
     """
     Return n (grid, instruction, goal) of one family and size; the same for every model.
 
     In another `table`, the same layouts and goals with its kinds, named by `naming`
-    (data/renaming.py: the name, an alias, or a typo of the name).
+    (data/renaming.py: the name, an alias, or a typo of the name); with `wording`
+    'paraphrase', the instructions worded as people word them (data/paraphrase.py).
     """
+    if wording not in WORDINGS:
+        raise ValueError(f'unknown wording {wording!r}; use one of {", ".join(WORDINGS)}')
     rng = np.random.default_rng([seed, size, FAMILIES.index(family)])
     worlds = [sample(rng, family, size) for _ in range(n)]
-    if table.names == PUDDLEWORLD.names and naming == 'name':
-        return worlds
-    renamer = np.random.default_rng([seed, size, FAMILIES.index(family), 1])
-    return [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
+    if table.names != PUDDLEWORLD.names or naming != 'name':
+        renamer = np.random.default_rng([seed, size, FAMILIES.index(family), 1])
+        worlds = [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
+    if wording == 'paraphrase':
+        words = np.random.default_rng([seed, size, FAMILIES.index(family), 2])
+        names = {w for n in table.names for w in n.split('_')}
+        worlds = [(g, paraphrase(t, words, names), goal) for g, t, goal in worlds]
+    return worlds
 
 
 def _summary(distances: list[int]) -> dict:
@@ -97,6 +107,7 @@ def run_suite(
     progress: bool = True,
     entities: str | Path | EntityTable | None = None,
     naming: str = 'name',
+    wording: str = 'plain',
 ) -> dict:
     """
     Hit and MD per family and size, per group and size, per size, and overall.
@@ -117,7 +128,7 @@ def run_suite(
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
     for family, size in tqdm(jobs, desc='suite', disable=not progress, unit='family'):
-        worlds = suite_worlds(family, size, n, seed, table, naming)
+        worlds = suite_worlds(family, size, n, seed, table, naming, wording)
         grids = np.stack([w[0] for w in worlds])
         texts = [w[1] for w in worlds]
         goals = np.array([w[2] for w in worlds])
@@ -135,6 +146,7 @@ def run_suite(
         'checkpoint': str(checkpoint),
         'entities': table.domain,
         'naming': naming,
+        'wording': wording,
         'model': loaded.name,
         'seed': seed,
         'n_per_family': n,
@@ -237,6 +249,7 @@ def cmd_suite(args) -> int:
         progress=not args.json,
         entities=args.entities,
         naming=args.naming,
+        wording=args.wording,
     )
     if args.json:
         print(json.dumps(result))
@@ -281,6 +294,12 @@ def register_cli(sub) -> None:
         choices=NAMINGS,
         help="how instructions name the landmarks: the table's names, its aliases, or a "
         'one-letter typo of the names',
+    )
+    p.add_argument(
+        '--wording',
+        default='plain',
+        choices=WORDINGS,
+        help="the generator's grammar, or paraphrased as people word it (data/paraphrase.py)",
     )
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.add_argument('--out', default=None, help='write suite.json and failure PNGs here')

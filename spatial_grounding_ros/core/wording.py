@@ -1,0 +1,112 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+How people word a reference, and the words the model learned for it.
+
+The default learned Janner et al.'s grammar ("reach cell two below star") and the human
+PuddleWorld annotators' words. A robot's user says "drive two squares south of the sink,
+please". `PHRASES` is our own grammar of such wordings, written from how people talk to a
+robot, each with the words the model learned for it: the relation (under, beneath, south of:
+below; east of: to the right of), units after a count (cells, squares, steps, spaces: none),
+digits (2: two), verbs (go to, drive to, navigate to, stop on: reach) and filler (please,
+the robot should). `canonical` rewrites an instruction with them, longest phrase first, and
+`drop_unknown` leaves out the words the model never saw, so they cannot move the goal.
+data/paraphrase.py draws wordings from the same table to measure it.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from .text import tokenize
+
+# canonical words -> the other wordings of them (each a phrase of one or more words)
+PHRASES = {
+    'below': ['under', 'beneath', 'underneath', 'south of', 'down from'],
+    'above': ['over', 'north of', 'up from'],
+    'to the left of': ['west of', 'to the west of', 'on the west of', 'on the left side of'],
+    'to the right of': ['east of', 'to the east of', 'on the east of', 'on the right side of'],
+    'to top left of': ['northwest of', 'above and to the left of', 'up and to the left of'],
+    'to top right of': ['northeast of', 'above and to the right of', 'up and to the right of'],
+    'to bottom left of': ['southwest of', 'below and to the left of', 'down and to the left of'],
+    'to bottom right of': [
+        'southeast of', 'below and to the right of', 'down and to the right of',
+    ],
+    'closest to': ['nearest to', 'next to', 'near to'],
+    'between': ['in between', 'halfway between', 'midway between'],
+    'westernmost': ['leftmost', 'farthest west', 'most western', 'furthest west'],
+    'easternmost': ['rightmost', 'farthest east', 'most eastern', 'furthest east'],
+    'northernmost': ['topmost', 'uppermost', 'highest', 'farthest north', 'most northern'],
+    'southernmost': ['bottommost', 'lowest', 'farthest south', 'most southern'],
+    'reach': [
+        'go to', 'move to', 'drive to', 'navigate to', 'head to', 'travel to', 'get to',
+        'proceed to', 'stop on', 'stop at', 'park on', 'park at', 'go', 'move', 'drive',
+        'navigate', 'head', 'find',
+    ],
+    'cell': ['square', 'spot', 'tile', 'space', 'position', 'place', 'location'],
+    'one': ['1'],
+    'two': ['2'],
+    'three': ['3'],
+    'four': ['4'],
+    '': [
+        'please', 'the robot should', 'robot', 'can you', 'could you', 'i want you to',
+        'you should', 'now', 'thanks', 'thank you', 'okay', 'ok', 'just', 'directly',
+        'immediately', 'exactly',
+    ],
+}  # fmt: skip
+# words after a count that only say its unit: "two cells below" is "two below"
+UNITS = frozenset('cell cells square squares step steps space spaces tile tiles spot spots'.split())
+COUNTS = frozenset('one two three four'.split())
+
+
+def _rewrites() -> list[tuple[tuple[str, ...], tuple[str, ...]]]:
+    """Every (wording, canonical words), longest wording first."""
+    pairs = [
+        (tuple(tokenize(w)), tuple(tokenize(canon)))
+        for canon, wordings in PHRASES.items()
+        for w in wordings
+    ]
+    return sorted(pairs, key=lambda p: -len(p[0]))
+
+
+REWRITES = _rewrites()
+
+
+def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
+    """
+    Return the words with each wording of PHRASES replaced by the model's words.
+
+    Indices in `keep` (a landmark's name) are never rewritten; a unit word after a count is
+    dropped.
+    """
+    keep = set(keep)
+    out, i = [], 0
+    while i < len(words):
+        if words[i] in UNITS and out and out[-1] in COUNTS and i not in keep:
+            i += 1
+            continue
+        for wording, canon in REWRITES:
+            n = len(wording)
+            if tuple(words[i:i + n]) == wording and not keep & set(range(i, i + n)):
+                out += canon
+                i += n
+                break
+        else:
+            out.append(words[i])
+            i += 1
+    return out
+
+
+def wording_words() -> frozenset[str]:
+    """Return every word of the wordings this module reads: none of them names a landmark."""
+    return frozenset(w for ws in PHRASES.values() for p in ws for w in tokenize(p)) | UNITS
+
+
+def drop_unknown(words: list[str], known) -> list[str]:
+    """Return the words the model knows (an instruction of none keeps its words)."""
+    kept = [w for w in words if w in known]
+    return kept or words

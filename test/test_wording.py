@@ -1,0 +1,70 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""People's wordings become the model's words, and words it never saw cannot move the goal."""
+
+import numpy as np
+import pytest
+from spatial_grounding_ros.core.text import tokenize
+from spatial_grounding_ros.core.wording import canonical, drop_unknown
+from spatial_grounding_ros.data.paraphrase import paraphrase
+from spatial_grounding_ros.grounder import Grounder
+
+
+@pytest.mark.parametrize(
+    'said, meant',
+    [
+        ('please drive two squares south of the star', 'reach two below the star'),
+        ('the robot should stop on the spot 3 steps east of the rock',
+         'reach the cell three to the right of the rock'),
+        ('navigate to the tree nearest to the heart thanks',
+         'reach the tree closest to the heart'),
+        ('go to the leftmost house', 'reach the westernmost house'),
+        ('move to the place in between the star and the circle',
+         'reach the cell between the star and the circle'),
+        ('reach cell two below star', 'reach cell two below star'),  # the model's own
+        ('reach cell to left of star', 'reach cell to left of star'),
+    ],
+)
+def test_wordings_become_the_models_words(said, meant):
+    assert ' '.join(canonical(tokenize(said))) == meant
+
+
+def test_a_landmark_name_is_never_reworded():
+    words = tokenize('go two cells under the spot')  # a landmark called "spot"
+    assert canonical(words, keep=[5]) == ['reach', 'two', 'below', 'the', 'spot']
+    assert canonical(words) == ['reach', 'two', 'below', 'the', 'cell']
+
+
+def test_unknown_words_are_left_out_unless_nothing_is_left():
+    assert drop_unknown(['reach', 'zorp', 'star'], {'reach', 'star'}) == ['reach', 'star']
+    assert drop_unknown(['zorp'], {'reach'}) == ['zorp']
+
+
+def test_paraphrases_keep_names_and_vary():
+    rng = np.random.default_rng(0)
+    texts = {paraphrase('reach cell two below star', rng, {'star'}) for _ in range(30)}
+    assert len(texts) > 10 and all(t.split()[-1] in ('star', 'please', 'thanks', 'now')
+                                   or 'star' in t.split() for t in texts)
+
+
+@pytest.fixture(scope='module')
+def grounder():
+    return Grounder.from_checkpoint()
+
+
+def test_unknown_and_filler_words_do_not_move_the_goal(grounder):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[3, 4], grid[6, 7] = 2, 8  # a star, a rock
+    plain = grounder.ground(grid, 'reach cell two below the star')
+    for noisy in (
+        'zorp reach cell two below the star quux',
+        'please, robot, go two squares south of the star now',
+        'blorf the robot should drive 2 spaces beneath the star thanks',
+    ):
+        g = grounder.ground(grid, noisy)
+        assert (g.goal, g.reason) == (plain.goal, None), g.model_instruction
+    assert plain.goal == (5, 4)
