@@ -171,6 +171,55 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
     assert got['reward'][-1].data == pytest.approx(data.rewards[1][target])
 
 
+def test_sim_time_without_clock_still_starts_and_walks(ros):
+    """
+    use_sim_time:=true with nothing on /clock: the node's timers run on steady time.
+
+    The first episode waits for a subscriber (a timer) and a goal_pose is walked to (a timer);
+    ROS-time timers would never fire here. Stamps follow the node's clock: sim time 0.
+    """
+    make, executor = ros
+    params = [
+        Parameter('use_sim_time', value=True),
+        Parameter('source', value='generator-local'),
+        Parameter('episodes', value=2),
+        Parameter('seed', value=5),
+        Parameter('step_period', value=0.01),
+        Parameter('start_after_subscribers', value=1),
+    ]
+    make(GridWorldNode, namespace=NAMESPACE, parameter_overrides=params)
+    probe = make(Probe)
+    got = probe.got
+    spin_until(executor, lambda: got['instruction'] and got['pose'] and got['map'])
+    assert got['map'][-1].header.stamp.sec == 0 and got['map'][-1].header.stamp.nanosec == 0
+    info = got['map'][-1].info
+    target = convert.point_to_cell(
+        got['goal'][-1].pose.position.x, got['goal'][-1].pose.position.y, info
+    )
+    probe.goal.publish(convert.cell_to_pose(target, info, 'map', got['goal'][-1].header.stamp))
+    spin_until(executor, lambda: got['terminated'] and got['terminated'][-1].data)
+    last = got['pose'][-1].pose.position
+    assert convert.point_to_cell(last.x, last.y, info) == target
+
+
+def test_closed_loop_demo_on_sim_time(tmp_path):
+    """The demo with use_sim_time:=true on both nodes (no /clock) reaches its goals."""
+    from spatial_grounding_ros.ros.demo import run_demo
+
+    summary = run_demo(
+        tmp_path,
+        episodes=2,
+        seed=1,
+        data_dir=str(tmp_path / 'no_data'),
+        step_period=0.02,
+        use_sim_time=True,
+    )
+    assert summary['episodes'] == 2
+    assert summary['from_bag']['hit'] == 1.0, summary['per_episode']
+    for episode in summary['per_episode']:
+        assert episode['end'] == episode['goal'], episode  # walked to each goal_pose
+
+
 def test_closed_loop_demo(tmp_path, capsys):
     """
     Three episodes through the real processes, each goal_pose on the cell the instruction names.

@@ -46,11 +46,14 @@ from ..data.datasets import DEFAULT_DATA
 from ..studies.plots import plot_grounding
 from ..training.options import ranged
 
-RECORDED = {  # topic -> type: every topic of the two nodes but the action, unused here
+# inputs nobody publishes in the demo: the action, and the robot pose a grounder may read
+# (the watcher waits until every recorded topic has a publisher)
+UNPUBLISHED = {topics.ACTION, getattr(topics, 'ROBOT_POSE', topics.ACTION)}
+RECORDED = {  # topic -> type: every topic the two nodes publish here
     # the nodes' diagnostics are remapped into the demo's namespace: recorded there
     topic.lstrip('/'): msgtype
     for topic, msgtype in topics.MSGTYPES.items()
-    if topic != topics.ACTION
+    if topic not in UNPUBLISHED
 }
 # How long every followed subscription must have been matched before the watcher subscribes
 # to the instruction. A subscription counts a publisher as matched when its own reader has
@@ -299,8 +302,15 @@ def run_demo(
     data_dir: str = DEFAULT_DATA,
     step_period: float = 0.05,
     step_limit: int = 40,
+    use_sim_time: bool = False,
 ) -> dict:
-    """Run `episodes` episodes of the closed loop into `out`; return the summary."""
+    """
+    Run `episodes` episodes of the closed loop into `out`; return the summary.
+
+    `use_sim_time` starts both nodes with use_sim_time:=true and nothing on /clock, as under a
+    simulator that has not started its clock: the gridworld paces itself on steady time, and
+    the goals and poses are stamped 0.
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bag_path = out / 'demo_bag'
@@ -314,6 +324,8 @@ def run_demo(
     )
     namespace = f'/demo_{os.getpid()}'
     common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', topics.DIAGNOSTICS_INTO_NAMESPACE]
+    if use_sim_time:
+        common += ['-p', 'use_sim_time:=true']
     # the first episode waits for the instruction's three subscribers: the grounder, the
     # recorder and the watcher
     gridworld = [
@@ -393,7 +405,7 @@ def run_demo(
 
 
 def cmd_closed_loop_demo(args) -> int:
-    run_demo(args.out, args.episodes, args.seed, args.data)
+    run_demo(args.out, args.episodes, args.seed, args.data, use_sim_time=args.use_sim_time)
     return 0
 
 
@@ -409,4 +421,9 @@ def register_cli(sub) -> None:
         help='PuddleWorld local test maps are used when this folder holds them',
     )
     d.add_argument('--out', default='demo_out')
+    d.add_argument(
+        '--use-sim-time',
+        action='store_true',
+        help='start the nodes with use_sim_time:=true (no /clock is published)',
+    )
     d.set_defaults(func=cmd_closed_loop_demo)

@@ -28,6 +28,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 import numpy as np
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from std_msgs.msg import Bool, Float32, Float32MultiArray, Header, Int32, String
 from std_srvs.srv import Trigger
@@ -172,12 +173,19 @@ class GridWorldNode(Node):
         self.create_service(Trigger, topics.NEXT_EPISODE, self.on_next)
         self.path_policy: np.ndarray | None = None  # greedy actions toward a goal_pose
         self.path_goal: tuple[int, int] | None = None
-        self.walk_timer = self.create_timer(self.param('step_period'), self.walk_step)
+        # The timers pace the simulation itself, so they run on steady time: with
+        # use_sim_time:=true and nothing on /clock (this node is the simulation), ROS-time
+        # timers would never fire and the walk and the first episode would wait forever.
+        # Stamps still come from the node's clock (sim time when asked).
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.walk_timer = self.create_timer(
+            self.param('step_period'), self.walk_step, clock=steady
+        )
         self.start_timer = None
         if self.param('start_after_subscribers') == 0:
             self.start_episode(None)
         else:
-            self.start_timer = self.create_timer(0.02, self.start_when_subscribed)
+            self.start_timer = self.create_timer(0.02, self.start_when_subscribed, clock=steady)
 
     def start_when_subscribed(self) -> None:
         if self.instruction_pub.get_subscription_count() >= self.param('start_after_subscribers'):
