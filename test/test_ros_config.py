@@ -282,3 +282,40 @@ def test_rviz_config_shows_the_maps_goal_and_agent_on_relative_topics():
         assert displays[topic]['Class'] == 'rviz_default_plugins/Pose'
     [goal_tool] = [t for t in manager['Tools'] if t['Class'] == 'rviz_default_plugins/SetGoal']
     assert goal_tool['Topic']['Value'] == 'goal_pose'
+
+
+# --- package.xml
+
+
+# import name -> its package.xml key, for what the package imports outside the standard library
+ROSDEP_KEYS = {
+    'numpy': 'python3-numpy',
+    'yaml': 'python3-yaml',
+    'matplotlib': 'python3-matplotlib',
+    'tqdm': 'python3-tqdm',
+    'torch': 'python3-torch',
+    'gymnasium': 'python3-gymnasium-pip',
+    'rosbags': 'python3-rosbags-pip',
+}
+
+
+def test_package_xml_declares_every_imported_package():
+    """Every third-party module imported under spatial_grounding_ros/ is a package.xml depend."""
+    import sys
+    import xml.etree.ElementTree as ElementTree
+
+    root = ElementTree.parse(REPO / 'package.xml').getroot()
+    depends = {e.text for e in root if e.tag in ('depend', 'exec_depend')}
+    tests = {e.text for e in root if e.tag == 'test_depend'}
+    imported = set()
+    for path in (REPO / 'spatial_grounding_ros').rglob('*.py'):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                imported |= {a.name.split('.')[0] for a in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                imported.add(node.module.split('.')[0])
+    third_party = imported - set(sys.stdlib_module_names) - {'spatial_grounding_ros'}
+    missing = sorted(m for m in third_party if ROSDEP_KEYS.get(m, m) not in depends)
+    assert not missing, f'package.xml lacks exec_depends for {missing}'
+    assert {'ament_copyright', 'ament_flake8', 'ament_pep257', 'python3-pytest'} <= tests
+    assert 'rviz2' in depends  # demo.launch.py's rviz:=true
