@@ -94,6 +94,7 @@ def make_probe(context, namespace: str, grounder_name: str):
     from nav_msgs.msg import OccupancyGrid
     from rcl_interfaces.msg import Log
     from rclpy.node import Node
+    from sensor_msgs.msg import Image
     from spatial_grounding_ros.ros import convert
     from spatial_grounding_ros.ros.qos import LATCHED
     from std_msgs.msg import Float32MultiArray, Header, String
@@ -101,22 +102,34 @@ def make_probe(context, namespace: str, grounder_name: str):
     logger_name = grounder_name.strip('/').replace('/', '.')  # how /rosout names its lines
 
     class GrounderProbe(Node):
-        RECORDS = ('goals', 'value_maps', 'raw_maps', 'relation_maps', 'diagnostics', 'warnings')
+        RECORDS = (
+            'goals',
+            'value_maps',
+            'raw_maps',
+            'images',
+            'relation_maps',
+            'diagnostics',
+            'statuses',
+            'warnings',
+        )
 
         def __init__(self):
             super().__init__('grounder_probe', namespace=namespace, context=context)
             self.goals, self.value_maps, self.raw_maps, self.relation_maps = [], [], [], []
             self.diagnostics, self.warnings = [], []
+            self.images, self.statuses = [], []  # value_map_image; the 1 Hz `<node>: status`
             self.stamps = itertools.count(1)
             sub = self.create_subscription
             self.goal_sub = sub(PoseStamped, 'goal_pose', self.goals.append, 10)
             sub(OccupancyGrid, 'value_map', self.value_maps.append, LATCHED)
             sub(Float32MultiArray, 'value_map_raw', self.raw_maps.append, LATCHED)
             sub(OccupancyGrid, 'relation_map', self.relation_maps.append, LATCHED)
+            sub(Image, 'value_map_image', self.images.append, LATCHED)
             self.diagnostics_sub = sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 100)
             sub(Log, '/rosout', self.on_log, 100)
             self.map_pub = self.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
             self.instruction_pub = self.create_publisher(String, 'instruction', 10)
+            self.robot_pose_pub = self.create_publisher(PoseStamped, 'robot_pose', 10)
 
         def counts(self) -> dict:
             """How many of each output so far; pass to new() to get what came after."""
@@ -126,7 +139,12 @@ def make_probe(context, namespace: str, grounder_name: str):
             return getattr(self, record)[counts[record]:]
 
         def on_diagnostics(self, msg):
-            self.diagnostics += [s for s in msg.status if s.name.startswith(grounder_name + ':')]
+            # the periodic status apart: the events' tests count diagnostics one per event
+            for status in msg.status:
+                if status.name == f'{grounder_name}: status':
+                    self.statuses.append(status)
+                elif status.name.startswith(grounder_name + ':'):
+                    self.diagnostics.append(status)
 
         def on_log(self, msg):
             # /rosout is global: keep the lines of this namespace's grounder only

@@ -18,6 +18,7 @@ INSTRUCTION = 'instruction'
 GOAL_POSE = 'goal_pose'
 VALUE_MAP = 'value_map'
 VALUE_MAP_RAW = 'value_map_raw'
+VALUE_MAP_IMAGE = 'value_map_image'
 RELATION_MAP = 'relation_map'
 TRUE_GOAL = 'true_goal'
 TRUE_VALUE_MAP = 'true_value_map'
@@ -26,6 +27,8 @@ AGENT_POSE = 'agent_pose'
 REWARD = 'reward'
 TERMINATED = 'terminated'
 ACTION = 'action'
+# the robot's pose the grounder reads for goal_heading: keep
+ROBOT_POSE = 'robot_pose'
 DIAGNOSTICS = '/diagnostics'
 # the remap rule that moves a node's DIAGNOSTICS into its namespace (the demo, the gym client)
 DIAGNOSTICS_INTO_NAMESPACE = f'{DIAGNOSTICS}:={DIAGNOSTICS.lstrip("/")}'
@@ -33,6 +36,8 @@ DIAGNOSTICS_INTO_NAMESPACE = f'{DIAGNOSTICS}:={DIAGNOSTICS.lstrip("/")}'
 # the gridworld node's services (std_srvs/srv/Trigger)
 NEXT_EPISODE = 'next_episode'
 RESET_EPISODE = 'reset_episode'
+# the grounder node's service (spatial_grounding_interfaces/srv/GroundInstruction)
+GROUND_INSTRUCTION = 'ground_instruction'
 
 MSGTYPES = {
     ENTITY_MAP: 'nav_msgs/msg/OccupancyGrid',
@@ -41,10 +46,12 @@ MSGTYPES = {
     TRUE_VALUE_MAP: 'std_msgs/msg/Float32MultiArray',
     TRUE_REWARD_MAP: 'std_msgs/msg/Float32MultiArray',
     VALUE_MAP_RAW: 'std_msgs/msg/Float32MultiArray',
+    VALUE_MAP_IMAGE: 'sensor_msgs/msg/Image',
     VALUE_MAP: 'nav_msgs/msg/OccupancyGrid',
     RELATION_MAP: 'nav_msgs/msg/OccupancyGrid',
     GOAL_POSE: 'geometry_msgs/msg/PoseStamped',
     AGENT_POSE: 'geometry_msgs/msg/PoseStamped',
+    ROBOT_POSE: 'geometry_msgs/msg/PoseStamped',
     REWARD: 'std_msgs/msg/Float32',
     TERMINATED: 'std_msgs/msg/Bool',
     ACTION: 'std_msgs/msg/Int32',
@@ -60,6 +67,7 @@ LATCHED = frozenset(
         TRUE_VALUE_MAP,
         TRUE_REWARD_MAP,
         VALUE_MAP_RAW,
+        VALUE_MAP_IMAGE,
         VALUE_MAP,
         RELATION_MAP,
     }

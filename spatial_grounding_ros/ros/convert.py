@@ -15,11 +15,14 @@ from __future__ import annotations
 
 import array
 import math
+import sys
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import Quaternion
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 import numpy as np
+from sensor_msgs.msg import Image
 from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 
 # the ROS side reads the geometry through this module: convert.cell_centre, convert.point_to_cell
@@ -27,8 +30,11 @@ from ..core.map_geometry import cell_centre, multiarray_to_map, origin_quaternio
 from ..core.map_geometry import point_to_cell  # noqa: F401
 
 PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
-# value_map cells: best = 100 (display) or best = 0 (cost, as a costmap reads it)
+# value_map cells: best = 100 (display) or best = 0 (cost: the reverse ramp); neither is meant
+# for a Nav2 costmap layer (docs/ros.md, "Feeding Nav2")
 VALUE_MAP_ENCODINGS = ('display', 'cost')
+# the goal's orientation: identity, toward the referent landmark, or the robot's own yaw
+GOAL_HEADINGS = ('identity', 'face_referent', 'keep')
 
 
 def check_map_info(info: MapMetaData, max_cells: int) -> None:
@@ -124,8 +130,9 @@ def value_map_to_occupancy_grid(
     Convert a value map (row 0 = north) to an OccupancyGrid, min..max scaled to 0..100.
 
     `display`: the best cell is 100, the worst 0 (a constant map is all 0), for a colour
-    ramp in RViz. `cost`: the reverse, best 0 and worst 100 (a constant map is all 0), as a
-    costmap reads cells (100 = lethal), so a planner is drawn to the goal, not kept out.
+    ramp in RViz. `cost`: the reverse, best 0 and worst 100 (a constant map is all 0), for
+    a costmap colour scheme. Neither is a Nav2 costmap's input: a StaticLayer marks the cells
+    at or above its lethal_threshold lethal, i.e. `cost`'s worst and `display`'s goal cell.
     """
     if encoding not in VALUE_MAP_ENCODINGS:
         raise ValueError(
@@ -176,16 +183,68 @@ def float32_multiarray_to_value_map(msg: Float32MultiArray) -> np.ndarray:
 
 
 def cell_to_pose(
-    cell: tuple[int, int], info: MapMetaData, frame_id: str, stamp: Time
+    cell: tuple[int, int],
+    info: MapMetaData,
+    frame_id: str,
+    stamp: Time,
+    yaw: float | None = None,
 ) -> PoseStamped:
     """
     Return a goal at the centre of data-set cell (row, col), stamped `stamp`.
 
-    Orientation is the identity in `frame_id` (facing the frame's +x, not the grid's east
-    when the origin is rotated): the instruction names a place, not a heading.
+    Orientation: `yaw` about z in `frame_id`; None is the identity (facing the frame's +x, not
+    the grid's east when the origin is rotated): an instruction names a place, not a heading.
     """
     pose = PoseStamped()
     pose.header.frame_id, pose.header.stamp = frame_id, stamp
     pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = cell_centre(cell, info)
-    pose.pose.orientation.w = 1.0
+    pose.pose.orientation = yaw_quaternion(0.0 if yaw is None else yaw)
     return pose
+
+
+def value_map_to_image(values: np.ndarray, header: Header) -> Image:
+    """
+    Return exact values as a sensor_msgs/Image, 32FC1, north up.
+
+    Image row r is data-set row r (row 0 = north, the top of the picture), i.e. OccupancyGrid
+    row height-1-r: the rows of value_map_raw in reverse order. Column c is grid column c.
+    """
+    values = np.ascontiguousarray(np.asarray(values, dtype=np.float32))
+    height, width = values.shape
+    msg = Image(header=header, height=height, width=width, encoding='32FC1')
+    msg.is_bigendian = int(sys.byteorder == 'big')
+    msg.step = width * 4
+    msg.data = array.array('B', values.tobytes())
+    return msg
+
+
+def image_to_value_map(msg: Image) -> np.ndarray:
+    """Inverse of value_map_to_image: (H, W) float32, row 0 = north."""
+    if msg.encoding != '32FC1':
+        raise ValueError(f'expected a 32FC1 image, got {msg.encoding!r}')
+    dtype = np.dtype('>f4' if msg.is_bigendian else '<f4')
+    rows = np.frombuffer(bytes(msg.data), dtype=np.uint8).reshape(msg.height, msg.step)
+    return rows[:, : msg.width * 4].copy().view(dtype).astype(np.float32)
+
+
+def yaw_quaternion(yaw: float) -> Quaternion:
+    """Return the rotation by `yaw` about z."""
+    return Quaternion(z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
+
+
+def quaternion_yaw(q: Quaternion) -> float:
+    """Return the yaw (rotation about z) of an orientation, as tf2's getYaw."""
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def yaw_toward(cell: tuple[int, int], target: tuple[int, int] | None, info: MapMetaData):
+    """
+    Return the map-frame yaw from `cell`'s centre toward `target`'s centre.
+
+    None when there is no target or it is the cell itself (no direction to face).
+    """
+    if target is None or tuple(target) == tuple(cell):
+        return None
+    x0, y0, _ = cell_centre(cell, info)
+    x1, y1, _ = cell_centre(target, info)
+    return math.atan2(y1 - y0, x1 - x0)

@@ -7,32 +7,31 @@
 """
 The grounder node (`ros2 run spatial_grounding_ros grounder`).
 
-A lifecycle node over spatial_grounding_ros.grounder.Grounder.
+A lifecycle node over spatial_grounding_ros.grounder.Grounder, as Nav2's servers: configure
+loads the checkpoint and the entity table and creates the topics and the ground_instruction
+service; activate starts grounding; deactivate stops it (and drops the held instruction);
+cleanup releases all. `autostart` (the default) configures and activates at start-up.
 
-Lifecycle (as Nav2's servers): configure loads and checks the checkpoint and the entity
-table and creates the topics; activate starts grounding; deactivate stops it (no goal is
-published while inactive, and the held instruction is dropped); cleanup releases the model,
-the map and the topics. With `autostart` (the default) the node configures and activates
-itself, so `ros2 run` alone works; with `autostart: false` it waits, unconfigured, for a
-lifecycle manager on `<node>/change_state`.
-
-While active it holds the latest valid entity_map and instruction; it grounds when an
-instruction arrives and a map is held (or when a map arrives for an instruction that is still
-waiting), then publishes goal_pose, value_map, value_map_raw, relation_map and an OK
-diagnostic; each accepted map gets an OK diagnostic too (`<node>: entity_map`, with the map's
-stamp). Bad input gets a warning, a WARN diagnostic on /diagnostics, no goal, and the node
-keeps running. Topic names are fixed and relative: remap them (`-r goal_pose:=...`).
+While active it holds the latest valid entity_map and instruction and grounds when both are
+there (an instruction waits for a map at most instruction_timeout), publishing goal_pose (none
+on a decline), value_map, value_map_raw, value_map_image, relation_map and a diagnostic (OK,
+or WARN naming the decline's reason); the node's state is on /diagnostics every second. Bad
+input gets a warning, a WARN diagnostic, no goal, and the node keeps running. The service
+ground_instruction (ground_service.py) answers one instruction without publishing. Topic names
+are fixed and relative: remap them (`-r goal_pose:=...`).
 """
 
 from __future__ import annotations
 
 import sys
+import time
 from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 import numpy as np
+from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import (
     LifecycleNode,
     LifecyclePublisher,
@@ -40,19 +39,33 @@ from rclpy.lifecycle import (
     TransitionCallbackReturn,
 )
 from rclpy.publisher import Publisher
+from rclpy.service import Service
+from sensor_msgs.msg import Image
+from spatial_grounding_interfaces.srv import GroundInstruction
 from std_msgs.msg import Float32MultiArray, Header, String
 import torch
 
 from . import convert
-from .node_support import declare_parameters, Param, report, spin
+from .ground_service import answer, goal_pose
+from .node_support import (
+    declare_parameters,
+    guard_change_state,
+    Param,
+    publish_status,
+    report,
+    SEE_OVERRIDES,
+    spin,
+)
 from .package_files import find_config
 from .qos import LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
-from ..grounder import DEFAULT_CHECKPOINT, Grounder
+from ..grounder import DEFAULT_CHECKPOINT, Grounder, Grounding
 from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
+GOAL_STAMPS = ('map', 'now')
+STEADY = ClockType.STEADY_TIME  # instruction_timeout is wall time, also under use_sim_time
 
 PARAMETERS = (
     Param(
@@ -66,8 +79,9 @@ PARAMETERS = (
     Param(
         'entity_table',
         'entities_puddleworld.yaml',
-        'entity table naming the entity_map cell values: a file in config/ or a path; it '
-        'must be the table the checkpoint was trained on (checked on configure)',
+        'entity table naming the entity_map cell values: a file in config/ or a path; any '
+        'table for a PuddleWorld model (its landmarks are read by role), only its own for '
+        'another model (checked on configure)',
         read_only=True,
         non_empty=True,
     ),
@@ -87,10 +101,40 @@ PARAMETERS = (
         'by the next instruction, so Nav2 does not get a new goal on every map update)',
     ),
     Param(
+        'min_confidence',
+        0.0,
+        'decline (no goal; a WARN diagnostic, reason low-confidence) when the calibrated '
+        'probability of the best cell is below this; 0 never declines for confidence',
+        low=0.0,
+        high=1.0,
+    ),
+    Param(
+        'instruction_timeout',
+        30.0,
+        'seconds an instruction may wait for a valid entity_map; then it is dropped with a '
+        'WARN diagnostic, so a later map never grounds it; 0 = wait forever',
+        low=0.0,
+        high=86400.0,
+    ),
+    Param(
+        'goal_heading',
+        'identity',
+        "goal orientation: identity (the map frame's +x), face_referent (toward the named "
+        "landmark's cell nearest the goal), keep (the yaw of the latest robot_pose)",
+        choices=convert.GOAL_HEADINGS,
+    ),
+    Param(
+        'goal_stamp',
+        'map',
+        "goal_pose stamp: map = the entity map's stamp (where the map was), now = the node "
+        "clock's time of grounding",
+        choices=GOAL_STAMPS,
+    ),
+    Param(
         'value_map_encoding',
         'display',
         'value_map cells: display = best cell 100, worst 0 (a colour ramp); cost = best 0, '
-        'worst 100, as a costmap reads cells (100 = lethal)',
+        'worst 100 (a costmap colour scheme; not an input for a Nav2 costmap layer)',
         choices=convert.VALUE_MAP_ENCODINGS,
     ),
     Param(
@@ -122,14 +166,19 @@ class GrounderNode(LifecycleNode):
     """Entity map + instruction -> goal_pose and value maps, as a managed node."""
 
     def __init__(self, **node_options):
-        super().__init__(NODE_NAME, **node_options)
+        super().__init__(NODE_NAME, **{**SEE_OVERRIDES, **node_options})
         declare_parameters(self, PARAMETERS)
-        self.guard_change_state()
+        guard_change_state(self, self.state_label)
         self.grounder: Grounder | None = None
         self.configure_error = ''
         self.active = self.autostarting = False
-        self.topics = []  # publishers and subscriptions of configure
+        self.topics = []  # publishers, subscriptions and the service of configure
+        self.expiry_timer = None
+        self.robot_yaw: float | None = None  # of the latest robot_pose (goal_heading: keep)
         self.release_input()
+        # diagnostics in every state: they say why an instruction was not grounded
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        publish_status(self, self.diagnostics_pub, self.status)
         if not self.param('autostart'):
             self.get_logger().info(
                 f'unconfigured: waiting for a lifecycle manager on '
@@ -147,38 +196,32 @@ class GrounderNode(LifecycleNode):
     def param(self, name: str):
         return self.get_parameter(name).value
 
-    def guard_change_state(self) -> None:
-        """
-        Answer a change_state request for a transition the current state does not have.
+    def state_label(self) -> str:
+        return 'active' if self.active else 'inactive' if self.grounder else 'unconfigured'
 
-        Answer a change_state request for a transition the current state does not have
-        (activate while unconfigured, ...) with success false, as rclcpp does: rclpy raises
-        in the service callback, which would end the node's spin.
-        """
-        service = getattr(self, '_service_change_state', None)
-        if service is None:  # made with enable_communication_interface=False
-            return
-        change_state = service.callback
-
-        def guarded(request, response):
-            try:
-                return change_state(request, response)
-            except RuntimeError as exc:  # rclpy's RCLError: the transition is not registered
-                self.get_logger().warning(
-                    f'transition {request.transition.id} {request.transition.label!r} refused '
-                    f'in state {self._state_machine.current_state[1]!r}: '
-                    f'{str(exc).split(",")[0]}'
-                )
-                response.success = False
-                return response
-
-        service.callback = guarded
+    def status(self) -> tuple[bytes, str, dict]:
+        """Return the 1 Hz status: the lifecycle state, the map held, an instruction waiting."""
+        values = {
+            'state': self.state_label(),
+            'map': 'none' if self.grid is None else '{}x{}'.format(*self.grid.shape),
+            'instruction_waiting': self.instruction if self.instruction_pending else '',
+        }
+        if self.grounder is None and self.configure_error:
+            return DiagnosticStatus.WARN, f'configure failed: {self.configure_error}', values
+        return DiagnosticStatus.OK, values['state'], values
 
     def release_input(self) -> None:
         self.grid: np.ndarray | None = None  # latest valid map, row 0 = north
         self.map_msg: OccupancyGrid | None = None
+        self.drop_instruction()
+
+    def drop_instruction(self) -> None:
         self.instruction: str | None = None  # latest valid instruction
         self.instruction_pending = False  # not yet grounded on any map
+        self.instruction_received = 0.0  # time.monotonic() of its arrival
+        if self.expiry_timer is not None:
+            self.destroy_timer(self.expiry_timer)
+            self.expiry_timer = None
 
     # --- lifecycle transitions
 
@@ -194,28 +237,29 @@ class GrounderNode(LifecycleNode):
             if not self.autostarting:
                 self.get_logger().error(f'configure failed: {self.configure_error}')
             return TransitionCallbackReturn.FAILURE
-        self.goal_pub = self.create_lifecycle_publisher(PoseStamped, topics.GOAL_POSE, 10)
-        self.value_map_pub = self.create_lifecycle_publisher(
-            OccupancyGrid, topics.VALUE_MAP, LATCHED
-        )
-        self.value_raw_pub = self.create_lifecycle_publisher(
-            Float32MultiArray, topics.VALUE_MAP_RAW, LATCHED
-        )
-        self.relation_map_pub = self.create_lifecycle_publisher(
-            OccupancyGrid, topics.RELATION_MAP, LATCHED
-        )
-        # diagnostics also while inactive: they say why an instruction was not grounded
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self.configure_error = ''
+        publisher = self.create_lifecycle_publisher
+        self.goal_pub = publisher(PoseStamped, topics.GOAL_POSE, 10)
+        self.value_map_pub = publisher(OccupancyGrid, topics.VALUE_MAP, LATCHED)
+        self.value_raw_pub = publisher(Float32MultiArray, topics.VALUE_MAP_RAW, LATCHED)
+        self.value_image_pub = publisher(Image, topics.VALUE_MAP_IMAGE, LATCHED)
+        self.relation_map_pub = publisher(OccupancyGrid, topics.RELATION_MAP, LATCHED)
+        subscription = self.create_subscription
         self.topics = [
             self.goal_pub,
             self.value_map_pub,
             self.value_raw_pub,
+            self.value_image_pub,
             self.relation_map_pub,
-            self.diagnostics_pub,
-            self.create_subscription(
-                OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED
+            subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED),
+            subscription(String, topics.INSTRUCTION, self.on_instruction, 10),
+            subscription(PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10),
+            # ground_service.answer: one grounding per request, nothing published
+            self.create_service(
+                GroundInstruction,
+                topics.GROUND_INSTRUCTION,
+                lambda request, response: answer(self, request, response),
             ),
-            self.create_subscription(String, topics.INSTRUCTION, self.on_instruction, 10),
         ]
         return super().on_configure(state)
 
@@ -224,7 +268,10 @@ class GrounderNode(LifecycleNode):
             torch.set_num_threads(self.param('torch_threads'))
         table_path = find_config(self.param('entity_table'))
         table = EntityTable.from_yaml(table_path)
-        grounder = Grounder(load_checkpoint(self.param('checkpoint'), expect_entities=table))
+        # a PuddleWorld model reads any table; another only its own (Grounder says so)
+        grounder = Grounder(
+            load_checkpoint(self.param('checkpoint')), table, self.param('min_confidence')
+        )
         self.grounder = grounder
         self.get_logger().info(
             f'model {grounder.loaded.name} from '
@@ -240,7 +287,7 @@ class GrounderNode(LifecycleNode):
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         # a goal from an instruction given before the pause would surprise: drop it
         self.active = False
-        self.instruction, self.instruction_pending = None, False
+        self.drop_instruction()
         self.get_logger().info('inactive: instructions are not grounded')
         return super().on_deactivate(state)
 
@@ -257,17 +304,20 @@ class GrounderNode(LifecycleNode):
         return TransitionCallbackReturn.SUCCESS  # back to unconfigured
 
     def release(self) -> None:
-        """Give back what configure took: the model, the held input, the topics."""
+        """Give back what configure took: the model, the held input, the topics, the service."""
         self.active = False
         for entity in self.topics:
             if isinstance(entity, LifecyclePublisher):
                 self.destroy_lifecycle_publisher(entity)
             elif isinstance(entity, Publisher):
                 self.destroy_publisher(entity)
+            elif isinstance(entity, Service):
+                self.destroy_service(entity)
             else:
                 self.destroy_subscription(entity)
         self.topics = []
         self.grounder = None
+        self.robot_yaw = None
         self.release_input()
 
     def destroy_node(self) -> None:
@@ -303,6 +353,8 @@ class GrounderNode(LifecycleNode):
             height=grid.shape[0],
             width=grid.shape[1],
         )
+        if self.instruction_pending and self.instruction_expired():
+            self.expire_instruction()  # the timer's tick may not have come yet
         if (
             self.active
             and self.instruction is not None
@@ -310,40 +362,85 @@ class GrounderNode(LifecycleNode):
         ):
             self.ground()
 
+    def check_text(self, text: str) -> None:
+        """Raise ValueError naming what is wrong with an instruction (or the node's state)."""
+        if not self.active:
+            raise ValueError(
+                'the node is inactive (activate it through '
+                f'{self.get_fully_qualified_name()}/change_state)'
+            )
+        if not text.strip():
+            raise ValueError('instruction is empty')
+        limit = self.param('max_instruction_chars')
+        if len(text) > limit:
+            raise ValueError(
+                f'instruction has {len(text)} characters, more than '
+                f'max_instruction_chars={limit}'
+            )
+        self.grounder.check_instruction(text)
+
     def on_instruction(self, msg: String) -> None:
         text = msg.data
-        limit = self.param('max_instruction_chars')
         try:
-            if not self.active:
-                raise ValueError(
-                    'the node is inactive (activate it through '
-                    f'{self.get_fully_qualified_name()}/change_state)'
-                )
-            if not text.strip():
-                raise ValueError('instruction is empty')
-            if len(text) > limit:
-                raise ValueError(
-                    f'instruction has {len(text)} characters, more than '
-                    f'max_instruction_chars={limit}'
-                )
-            self.grounder.check_instruction(text)
+            self.check_text(text)
         except ValueError as exc:
-            self.instruction, self.instruction_pending = None, False
+            self.drop_instruction()
             self.report('instruction', DiagnosticStatus.WARN, f'instruction rejected: {exc}')
             return
+        self.drop_instruction()
         self.instruction, self.instruction_pending = text, True
+        self.instruction_received = time.monotonic()
         if self.grid is None:
+            timeout = self.param('instruction_timeout')
+            if timeout > 0:
+                self.expiry_timer = self.create_timer(
+                    timeout, self.expire_instruction, clock=Clock(clock_type=STEADY)
+                )
             self.report(
                 'instruction',
                 DiagnosticStatus.WARN,
-                f'no valid entity_map held yet: holding instruction {text!r} until one arrives',
+                f'no valid entity_map held yet: holding instruction {text!r} until one arrives'
+                + (f' (for at most {timeout:g} s)' if timeout > 0 else ''),
             )
             return
         self.ground()
 
+    def instruction_expired(self) -> bool:
+        timeout = self.param('instruction_timeout')
+        return timeout > 0 and time.monotonic() - self.instruction_received >= timeout
+
+    def expire_instruction(self) -> None:
+        """Drop an instruction that waited instruction_timeout for a map, saying so."""
+        text, pending = self.instruction, self.instruction_pending
+        self.drop_instruction()
+        if pending:
+            self.report(
+                'instruction',
+                DiagnosticStatus.WARN,
+                f'instruction {text!r} expired: no valid entity_map within '
+                f'instruction_timeout={self.param("instruction_timeout"):g} s; dropped, '
+                'send it again',
+            )
+
+    def on_robot_pose(self, msg: PoseStamped) -> None:
+        yaw = convert.quaternion_yaw(msg.pose.orientation)
+        if np.isfinite(yaw):
+            self.robot_yaw = yaw
+
+    def run_grounder(self, grid: np.ndarray, text: str) -> Grounding:
+        self.grounder.min_confidence = self.param('min_confidence')  # settable at run time
+        return self.grounder.ground(grid, text)
+
+    def output_header(self, map_msg: OccupancyGrid) -> Header:
+        # the map's stamp: the maps are that map's cells, placed where the map was then
+        return Header(
+            stamp=map_msg.header.stamp,
+            frame_id=map_msg.header.frame_id or self.param('default_frame_id'),
+        )
+
     def ground(self) -> None:
         try:
-            result = self.grounder.ground(self.grid, self.instruction)
+            result = self.run_grounder(self.grid, self.instruction)
         except Exception as exc:  # noqa: BLE001 - e.g. out of memory in torch: report, go on
             self.report(
                 'grounding',
@@ -352,24 +449,21 @@ class GrounderNode(LifecycleNode):
             )
             return
         self.instruction_pending = False
+        if self.expiry_timer is not None:
+            self.destroy_timer(self.expiry_timer)
+            self.expiry_timer = None
         info = self.map_msg.info
-        # the map's stamp: the goal is a cell of that map, placed where the map was then
-        # (a map in odom moves with the robot; tf2 reads stamp 0 as "latest")
-        header = Header(
-            stamp=self.map_msg.header.stamp,
-            frame_id=self.map_msg.header.frame_id or self.param('default_frame_id'),
-        )
+        header = self.output_header(self.map_msg)
         # goal first: it is what a planner waits for; a declined grounding sends none
         if result.goal is not None:
-            self.goal_pub.publish(
-                convert.cell_to_pose(result.goal, info, header.frame_id, header.stamp)
-            )
+            self.goal_pub.publish(goal_pose(self, result.goal, result, info, header))
         self.value_map_pub.publish(
             convert.value_map_to_occupancy_grid(
                 result.values, header, info, self.param('value_map_encoding')
             )
         )
         self.value_raw_pub.publish(convert.value_map_to_float32_multiarray(result.values))
+        self.value_image_pub.publish(convert.value_map_to_image(result.values, header))
         self.relation_map_pub.publish(
             convert.magnitude_to_occupancy_grid(result.relation_map, header, info)
         )

@@ -5,10 +5,11 @@
 # https://opensource.org/licenses/MIT.
 
 """
-What both executables share.
+What the executables share.
 
-Declared and checked parameters, a diagnostic that is also logged, and a main() that spins one node
-and shuts down cleanly.
+Declared and checked parameters, a diagnostic that is also logged, a 1 Hz status on
+/diagnostics (as diagnostic_updater publishes one), and a main() that spins one node and shuts
+down cleanly. Public rclpy API only (test/test_rclpy_private.py checks it).
 
 Start-up errors (a bad parameter value or type, checkpoint, entity table or params file) are
 one line `<name>: error: ...` on stderr and exit status 1.
@@ -23,8 +24,10 @@ import math
 import os
 import sys
 from typing import Callable, Iterable, NoReturn
+import weakref
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from lifecycle_msgs.srv import ChangeState
 from rcl_interfaces.msg import (
     FloatingPointRange,
     IntegerRange,
@@ -32,6 +35,8 @@ from rcl_interfaces.msg import (
     SetParametersResult,
 )
 import rclpy
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -39,10 +44,17 @@ from rclpy.publisher import Publisher
 from std_msgs.msg import Header
 
 from ..core.allocator import keep_freed_memory
+from ..core.topics import DIAGNOSTICS
 from ..training.options import range_problem, range_words
 
 # Declared by rclpy itself on every node; never reported as unknown.
 RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
+# Give a node class this (as GrounderNode does; spin() passes it to the node it makes): the
+# overrides from --params-file, -p and parameter_overrides are then declared parameters, the
+# public way to see them, so a name the node does not have can be reported.
+SEE_OVERRIDES = {'automatically_declare_parameters_from_overrides': True}
+STEADY_TIME = ClockType.STEADY_TIME
+STATUS_PERIOD = 1.0  # seconds between status diagnostics, as diagnostic_updater's default
 TYPE_NAMES = {bool: 'a bool', int: 'an integer', float: 'a double', str: 'a string'}
 
 
@@ -130,32 +142,44 @@ def declare_parameters(node: Node, params: Iterable[Param]) -> None:
 
     At start-up a bad value or type from a params file or `-p` raises ValueError (one line,
     naming the parameter); later, `set_parameters` refuses it with the same reason (and
-    rclpy refuses changes to read-only parameters). Names in the node's overrides that are
-    not parameters of the node get a warning: a typo would otherwise be ignored silently.
+    rclpy refuses changes to read-only parameters). A node made with SEE_OVERRIDES has its
+    overrides declared already: names in them that are not parameters of the node get a
+    warning (a typo would otherwise be ignored silently) and are undeclared again.
     """
     params = {p.name: p for p in params}
+    refused = []  # on_set's reasons, for an override refused while declaring
 
     def on_set(changes: list[Parameter]) -> SetParametersResult:
         for change in changes:
             spec = params.get(change.name)
             problem = spec and spec.problem(change.value)
             if problem:
-                return SetParametersResult(
-                    successful=False, reason=f'parameter {change.name} {problem}'
-                )
+                refused.append(f'parameter {change.name} {problem}')
+                return SetParametersResult(successful=False, reason=refused[-1])
         return SetParametersResult(successful=True)
 
-    node.add_on_set_parameters_callback(on_set)
-    # rclpy keeps what --params-file, -p and parameter_overrides gave this node here; there
-    # is no public accessor for the overrides of names that are never declared
-    overrides = dict(node._parameter_overrides)
+    # declared from the overrides (SEE_OVERRIDES), or nothing but rclpy's own
+    overrides = {
+        name: node.get_parameter(name).value
+        for name in node.list_parameters([], 0).names
+        if name not in RCLPY_PARAMETERS
+    }
     for spec in params.values():
         if spec.name in overrides:
-            problem = spec.problem(overrides[spec.name].value)
+            problem = spec.problem(overrides[spec.name])
             if problem:
                 raise ValueError(f'parameter {spec.name} {problem}')
-        node.declare_parameter(spec.name, spec.default, spec.descriptor())
-    unknown = sorted(set(overrides) - set(params) - set(RCLPY_PARAMETERS))
+            node.undeclare_parameter(spec.name)  # declared again with its descriptor
+    node.add_on_set_parameters_callback(on_set)
+    for spec in params.values():
+        try:
+            node.declare_parameter(spec.name, spec.default, spec.descriptor())
+        except (InvalidParameterValueException, InvalidParameterTypeException) as exc:
+            # an override the node could not see (made without SEE_OVERRIDES): on_set's reason
+            raise ValueError(refused[-1] if refused else f'parameter {spec.name}: {exc}') from None
+    unknown = sorted(set(overrides) - set(params))
+    for name in unknown:
+        node.undeclare_parameter(name)
     if unknown:
         node.get_logger().warning(
             f'ignoring unknown parameter(s) {", ".join(unknown)} (from a params file or -p): '
@@ -184,7 +208,7 @@ def report(
         level=level,
         name=f'{node.get_fully_qualified_name()}: {part}',
         message=message,
-        hardware_id='',
+        hardware_id=node.get_fully_qualified_name(),  # as diagnostic_updater sets it
     )
     status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
     publisher.publish(
@@ -192,7 +216,74 @@ def report(
     )
 
 
-def spin(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> NoReturn:
+def guard_change_state(node: Node, state_label: Callable[[], str]) -> None:
+    """
+    Answer a change_state request for a transition the current state does not have.
+
+    Answer it (activate while unconfigured, ...) with success false and a warning, as rclcpp
+    does: rclpy raises in the service callback, which would end the node's spin. The service
+    is found among the node's services by its type (none if the node was made with
+    enable_communication_interface=False).
+    """
+    for service in node.services:
+        if service.srv_type is not ChangeState:
+            continue
+        change_state = service.callback
+
+        def guarded(request, response, change_state=change_state):
+            try:
+                return change_state(request, response)
+            except RuntimeError as exc:  # rclpy's RCLError: the transition is not registered
+                node.get_logger().warning(
+                    f'transition {request.transition.id} {request.transition.label!r} '
+                    f'refused in state {state_label()!r}: {str(exc).split(",")[0]}'
+                )
+                response.success = False
+                return response
+
+        service.callback = guarded
+
+
+# the nodes whose status is published (publish_status), so spin() starts it once
+_STATUS = weakref.WeakKeyDictionary()
+
+
+def publish_status(
+    node: Node,
+    publisher: Publisher | None = None,
+    summary: Callable[[], tuple[bytes, str, dict]] | None = None,
+) -> None:
+    """
+    Publish the node's status on /diagnostics every STATUS_PERIOD seconds.
+
+    As diagnostic_updater does: one DiagnosticStatus named `<node>: status` with hardware_id
+    the node's fully qualified name; `summary()` gives its (level, message, values), by default
+    OK 'running'. `publisher` defaults to a new /diagnostics publisher. A second call for the
+    same node does nothing.
+    """
+    if node in _STATUS:
+        return
+    if publisher is None:
+        publisher = node.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+
+    def tick() -> None:
+        level, message, values = summary() if summary else (DiagnosticStatus.OK, 'running', {})
+        status = DiagnosticStatus(
+            level=level,
+            name=f'{node.get_fully_qualified_name()}: status',
+            message=message,
+            hardware_id=node.get_fully_qualified_name(),
+            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+        )
+        publisher.publish(
+            DiagnosticArray(header=Header(stamp=node.get_clock().now().to_msg()), status=[status])
+        )
+
+    # steady time: the status comes every second also under use_sim_time with no /clock yet
+    _STATUS[node] = node.create_timer(STATUS_PERIOD, tick, clock=Clock(clock_type=STEADY_TIME))
+
+
+def spin(make_node: Callable[..., Node], name: str, args: list[str] | None = None) -> NoReturn:
     """Make the node, spin it until Ctrl-C or shutdown, and exit: 1 after a start-up error."""
     # a crash in a C library (DDS, torch) then leaves a Python traceback in the log
     faulthandler.enable()
@@ -215,7 +306,8 @@ def _run(make_node: Callable[[], Node], name: str, args: list[str] | None) -> in
         return 1
     node = None
     try:
-        node = make_node()
+        node = make_node(**SEE_OVERRIDES)
+        publish_status(node)  # unless the node publishes its own
         # the model (with autostart), torch and rclpy made their long-lived objects at start-up:
         # freezing them keeps the collector's full passes, which scan every tracked object, off
         # the callbacks' latency
