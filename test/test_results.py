@@ -140,6 +140,7 @@ def readme_section(heading: str) -> str:
         ('Results: robustness', 'robustness.md'),
         ('Results: your own landmarks', 'landmarks.md'),
         ('Results: honest answers', 'honesty.md'),
+        ('Results: the node under noise words', 'robustness_grounder.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):

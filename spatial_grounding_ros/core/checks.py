@@ -28,6 +28,8 @@ grounder's to judge, after it has grounded.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .entities import EntityTable
@@ -70,6 +72,7 @@ CLAUSES = RELATION_WORDS | frozenset('in on at of with that which by from farthe
 PHRASE_ENDS = frozenset('and then please thanks now there here first'.split())
 # the map itself, never a landmark
 MAP_WORDS = frozenset('map grid board world field floor ground room'.split())
+ARTICLES = frozenset('the a an'.split())
 # words before an unknown word that put it where a landmark's name goes
 BEFORE_A_NAME = frozenset(
     'the a an of to with from near by beside between and reach closest nearest'.split()
@@ -164,19 +167,42 @@ def unknown_landmark(words: list[str], known, mentions: list[Mention]) -> str | 
     """
     Return a word no table kind or known word covers where a landmark's name goes, or None.
 
-    That is a word after "the", "of", "to" and the like that ends its phrase: "below the
-    fridge", "the fridge closest to the tree", but not "the gray stone" or "kitty corner".
+    That is a word that ends its phrase after "the", "of", "below" and the like: "below the
+    fridge", "go to the fridge", but not "the gray stone" or "kitty corner". Where the
+    instruction names a landmark of the table too, only a word right after an article counts
+    ("the chair closest to the fridge"; not "the tree furthest west somewhere").
     """
-    named = {i for m in mentions for i in range(m.start, m.end)}
+    before = BEFORE_A_NAME if not mentions else ARTICLES
     for i, w in enumerate(words):
-        if i in named or w in known or w in COMMON_WORDS or w in NUMBERS or w in DIRECTIONS:
-            continue
-        if w in QUALIFIERS or w in CLAUSES or w in MAP_WORDS:
+        if not unknown(w, known, mentions, i):
             continue
         ends = i + 1 == len(words) or words[i + 1] in CLAUSES | PHRASE_ENDS
-        if ends and i > 0 and words[i - 1] in BEFORE_A_NAME:
+        if ends and i > 0 and words[i - 1] in before:
             return w
     return None
+
+
+def unknown(word: str, known, mentions: list[Mention], at: int) -> bool:
+    """Return whether a word is none the checks, the model or the table know."""
+    if any(m.start <= at < m.end for m in mentions):
+        return False
+    return not (
+        word in known
+        or word in COMMON_WORDS
+        or word in NUMBERS
+        or word in DIRECTIONS
+        or word in QUALIFIERS
+        or word in CLAUSES
+        or word in MAP_WORDS
+    )
+
+
+def without_unknown(words: list[str], known, mentions: list[Mention]):
+    """Return the words and mentions with every unknown word left out, as the model reads."""
+    kept = [i for i, w in enumerate(words) if not unknown(w, known, mentions, i)]
+    where = {old: new for new, old in enumerate(kept)}
+    moved = [replace(m, start=where[m.start], end=where[m.end - 1] + 1) for m in mentions]
+    return [words[i] for i in kept], moved
 
 
 def structural_reason(
@@ -195,6 +221,8 @@ def structural_reason(
     word = unknown_landmark(words, known, mentions)
     if word is not None:
         return f'unknown-landmark: {word}'
+    # the rest reads the words around a name: an unknown word there says nothing
+    words, mentions = without_unknown(words, known, mentions)
     if off_map(grid, words, mentions):
         return 'off-map'
     if on_obstacle(table, grid, words, mentions):

@@ -59,8 +59,12 @@ PHRASES = {
     ],
 }  # fmt: skip
 # words after a count that only say its unit: "two cells below" is "two below"
-UNITS = frozenset('cell cells square squares step steps space spaces tile tiles spot spots'.split())
+UNITS = frozenset(
+    'cell cells square squares step steps space spaces tile tiles spot spots'.split()
+)
 COUNTS = frozenset('one two three four'.split())
+# the words a cell's other names follow when they name the cell of the request
+CELL_BEFORE = frozenset('reach the a that this'.split())
 
 
 def _rewrites() -> list[tuple[tuple[str, ...], tuple[str, ...]]]:
@@ -81,7 +85,7 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
     Return the words with each wording of PHRASES replaced by the model's words.
 
     Indices in `keep` (a landmark's name) are never rewritten; a unit word after a count is
-    dropped.
+    dropped; a verb is the model's only where it opens the request (after any filler).
     """
     keep = set(keep)
     out, i = [], 0
@@ -91,6 +95,10 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
             continue
         for wording, canon in REWRITES:
             n = len(wording)
+            if canon == ('reach',) and out:
+                continue  # a verb opens a request: mid-sentence, "head" or "find" is no verb
+            if canon == ('cell',) and not (out and out[-1] in CELL_BEFORE):
+                continue  # "the spot two below", not a "spot" dropped anywhere
             if tuple(words[i:i + n]) == wording and not keep & set(range(i, i + n)):
                 out += canon
                 i += n

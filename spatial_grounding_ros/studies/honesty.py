@@ -155,7 +155,9 @@ def markdown(result: dict) -> str:
         answered_hit = '-' if r['hit_answered'] is None else f'{r["hit_answered"]:.1%}'
         lines.append(
             f'| {name} | {r["n"]} | {r["declined"]:.1%} | {r["hit_all"]:.1%} | {answered_hit} | '
-            f'{r["md_best"]:.2f} / {r["hit_best"]:.1%} | ' + (', '.join(r['reasons']) or '-') + ' |'
+            f'{r["md_best"]:.2f} / {r["hit_best"]:.1%} | '
+            + (', '.join(r['reasons']) or '-')
+            + ' |'
         )
     lines += ['', 'Expected calibration error of the answers given (10 bins): '
               + ', '.join(f'{k} {v:.3f}' for k, v in result['ece'].items()) + '.']
