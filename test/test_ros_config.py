@@ -265,12 +265,16 @@ def test_readme_launch_lines_use_the_declared_arguments():
 # --- rviz/spatial_grounding.rviz
 
 
-def test_rviz_config_shows_the_maps_goal_and_agent_on_relative_topics():
+def test_rviz_config_shows_the_maps_goal_agent_and_landmarks_on_relative_topics():
     config = yaml.safe_load((REPO / 'rviz' / 'spatial_grounding.rviz').read_text())
     manager = config['Visualization Manager']
     assert manager['Global Options']['Fixed Frame'] == 'map'
     displays = {d['Topic']['Value']: d for d in manager['Displays'] if 'Topic' in d}
-    assert set(displays) == {'entity_map', 'value_map', 'relation_map', 'goal_pose', 'agent_pose'}
+    assert set(displays) == {
+        'entity_map', 'value_map', 'relation_map', 'goal_pose', 'agent_pose', 'landmarks'
+    }
+    # the entity_mapper's input: the named landmarks as markers
+    assert displays['landmarks']['Class'] == 'rviz_default_plugins/MarkerArray'
     for topic in ('entity_map', 'value_map', 'relation_map'):
         d = displays[topic]
         assert d['Class'] == 'rviz_default_plugins/Map'

@@ -295,6 +295,27 @@ def summarise(lines: list[dict], bag_path: Path, recorded: dict) -> dict:
     return summary
 
 
+def node_arguments(
+    namespace, use_data, data_dir, episodes, seed, step_period, step_limit, use_sim_time
+):
+    """Return the --ros-args both nodes share, the gridworld's source and its own."""
+    source = (
+        ['-p', 'source:=pw-local', '-p', 'split:=test', '-p', f'data_dir:={data_dir}']
+        if use_data
+        else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
+    )
+    common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', topics.DIAGNOSTICS_INTO_NAMESPACE]
+    if use_sim_time:
+        common += ['-p', 'use_sim_time:=true']
+    # the first episode waits for the instruction's three subscribers: the grounder, the
+    # recorder and the watcher
+    gridworld = [
+        '-p', f'seed:={seed}', '-p', 'order:=sequential', '-p', f'step_limit:={step_limit}',
+        '-p', f'step_period:={step_period}', '-p', 'start_after_subscribers:=3',
+    ]  # fmt: skip
+    return common, source, gridworld
+
+
 def run_demo(
     out: str | Path,
     episodes: int = 5,
@@ -317,29 +338,10 @@ def run_demo(
     if bag_path.exists():
         shutil.rmtree(bag_path)
     use_data = (Path(data_dir) / 'puddleworld' / 'local.p').is_file()
-    source = (
-        ['-p', 'source:=pw-local', '-p', 'split:=test', '-p', f'data_dir:={data_dir}']
-        if use_data
-        else ['-p', 'source:=generator', '-p', f'episodes:={episodes}']
-    )
     namespace = f'/demo_{os.getpid()}'
-    common = ['--ros-args', '-r', f'__ns:={namespace}', '-r', topics.DIAGNOSTICS_INTO_NAMESPACE]
-    if use_sim_time:
-        common += ['-p', 'use_sim_time:=true']
-    # the first episode waits for the instruction's three subscribers: the grounder, the
-    # recorder and the watcher
-    gridworld = [
-        '-p',
-        f'seed:={seed}',
-        '-p',
-        'order:=sequential',
-        '-p',
-        f'step_limit:={step_limit}',
-        '-p',
-        f'step_period:={step_period}',
-        '-p',
-        'start_after_subscribers:=3',
-    ]
+    common, source, gridworld = node_arguments(
+        namespace, use_data, data_dir, episodes, seed, step_period, step_limit, use_sim_time
+    )
     rclpy.init()
     watcher = recording = None
     processes, logs = [], {}
