@@ -137,3 +137,21 @@ def test_names_the_model_knows_keep_their_kind():
     assert t.instruction == 'reach cell two below the rock near the tree'
     assert t.kinds == {8: 8, 9: 9}
     assert set(np.unique(t.grid)) == {0, 1, 8, 9}  # the unnamed landmarks are free ground
+
+
+def test_a_three_letter_name_takes_a_changed_letter_but_not_a_common_word():
+    table = EntityTable('t', ('floor', 'wall', 'bin', 'cup'), (1,), 7)
+    lexicon = Lexicon(table, COMMON_WORDS)
+    assert lexicon.mentioned_kinds('go to the bun then the cip') == [2, 3]
+    assert lexicon.mentioned_kinds('can you go one up') == []  # "can" and "one" are words
+
+
+def test_a_table_without_obstacles_still_renames_the_worlds():
+    from spatial_grounding_ros.data.generator import sample
+    from spatial_grounding_ros.data.renaming import rename
+
+    table = EntityTable('open', ('floor', 'desk', 'chair', 'lamp', 'sofa', 'door', 'plant',
+                                 'shelf', 'sink', 'oven', 'tv'), (), 7)
+    grid, text, _ = sample(np.random.default_rng(0), 'two-step', 10)
+    out, said = rename(grid, text, table, np.random.default_rng(1))
+    assert out.max() < len(table) and (out[grid == 1] == 0).all() and said != text

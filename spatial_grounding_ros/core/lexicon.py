@@ -70,6 +70,21 @@ def within_one_edit(a: str, b: str) -> bool:
     return False
 
 
+def short_typo(word: str, name: str) -> bool:
+    """
+    Return whether `word` is a typo of a three-letter name: one letter changed, not the first.
+
+    Shorter names are one edit from too many words for any other edit to be read as one.
+    """
+    return (
+        len(name) == 3
+        and len(word) == 3
+        and word[0] == name[0]
+        and word not in COMMON_WORDS
+        and sum(a != b for a, b in zip(word, name)) == 1
+    )
+
+
 def phrase_words(name: str) -> tuple[str, ...]:
     """Return the words of a name as an instruction would say them ('coffee_machine')."""
     return tuple(tokenize(name.replace('_', ' ')))
@@ -104,8 +119,9 @@ class Lexicon:
         close = {
             k
             for w, k in self.typo_words.items()
-            if len(w) >= TYPO_MIN_LETTERS
-            and (within_one_edit(word, w) or within_one_edit(singular(word), w))
+            if (len(w) >= TYPO_MIN_LETTERS and within_one_edit(word, w))
+            or (len(w) >= TYPO_MIN_LETTERS and within_one_edit(singular(word), w))
+            or short_typo(word, w)
         }
         return close.pop() if len(close) == 1 else None
 

@@ -8,11 +8,11 @@
 Generated worlds in another entity table: the same layout and answer, other landmarks.
 
 A PuddleWorld-style world of the generator becomes one of a user's table: grass its first
-free kind, puddles its first obstacle, and each landmark kind a distinct landmark kind of the
-table (drawn at random; the kinds the instruction names first, so they always get one; a
-landmark kind left over when the table has none to spare becomes free ground). The
-instruction names the new kinds by their name, by one of their aliases, or with a one-letter
-typo (`NAMINGS`).
+free kind, puddles its first obstacle (or free ground if it has none), and each landmark
+kind a distinct landmark kind of the table (drawn at random; the kinds the instruction names
+first, so they always get one; a landmark kind left over when the table has none to spare
+becomes free ground). The instruction names the new kinds by their name, by one of their
+aliases, or with a one-letter typo (`NAMINGS`).
 """
 
 from __future__ import annotations
@@ -31,10 +31,8 @@ LETTERS = 'abcdefghijklmnopqrstuvwxyz'
 def landmark_kinds(table: EntityTable) -> list[int]:
     """Return the kinds of a table that can stand for a landmark: not its ground, no obstacle."""
     free = [k for k in range(len(table)) if k not in table.obstacles]
-    if len(free) < 2 or not table.obstacles:
-        raise ValueError(
-            f'the {table.domain} table needs a free kind, an obstacle and at least one landmark'
-        )
+    if len(free) < 2:
+        raise ValueError(f'the {table.domain} table needs a free kind and at least one landmark')
     return free[1:]
 
 
@@ -85,7 +83,8 @@ def rename(
         raise ValueError(
             f'the {table.domain} table has too few landmark kinds for {instruction!r}'
         )
-    mapping = {GRASS: free, PUDDLE: table.obstacles[0]}
+    # puddles become the table's first obstacle, or free ground in a table without any
+    mapping = {GRASS: free, PUDDLE: table.obstacles[0] if table.obstacles else free}
     mapping.update({k: landmarks[i] if i < len(landmarks) else free for i, k in enumerate(order)})
     out = np.vectorize(mapping.get, otypes=[np.int64])(grid)
     said = [
