@@ -21,11 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .generator import FAMILY_OFFSETS, local_phrase, PUDDLE, random_grid, sample
+from .generator import FAMILY_OFFSETS, GRASS, local_phrase, PUDDLE, random_grid, sample
 from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from ..core.lexicon import count_objects
 
-GRASS = 0
 # the reason each kind of case should be declined with
 REASONS = {
     'missing': 'referent-missing',

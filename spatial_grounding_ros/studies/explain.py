@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from .ground import read_grid
 from .plots import plot_explanation
 from ..core import world
 from ..core.tasks import TASKS
@@ -143,19 +144,8 @@ def explain(
 
 
 def read_map(path: str | Path, entities, unseen_kinds: int) -> np.ndarray:
-    """Read an (H, W) grid of entity indices from a .npy file, checked against the table."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f'{path}: map file not found')
-    try:
-        grid = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise ValueError(f'{path}: not a .npy array ({exc})') from exc
-    if grid.ndim != 2 or grid.size == 0 or not np.issubdtype(grid.dtype, np.integer):
-        raise ValueError(
-            f'{path}: a map is a 2-D integer array of entity indices, '
-            f'got {grid.dtype} {grid.shape}'
-        )
+    """Read an (H, W) grid of entity indices (ground.read_grid), checked against the table."""
+    grid = read_grid(path)
     known = set(range(len(entities))) | set(
         range(len(entities) + 1, len(entities) + 1 + unseen_kinds)
     )

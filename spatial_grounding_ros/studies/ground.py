@@ -33,14 +33,24 @@ def read_grid(path: str | Path) -> np.ndarray:
     if not path.is_file():
         raise FileNotFoundError(f'{path}: map file not found')
     if path.suffix == '.npy':
-        return np.load(path)
-    rows = [line.split() for line in path.read_text().splitlines() if line.strip()]
-    if not rows or len({len(r) for r in rows}) != 1:
-        raise ValueError(f'{path}: a text map needs rows of equal length')
-    try:
-        return np.array(rows, dtype=np.int64)
-    except ValueError as exc:
-        raise ValueError(f'{path}: a text map holds whole numbers only ({exc})') from exc
+        try:
+            grid = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise ValueError(f'{path}: not a .npy array ({exc})') from exc
+    else:
+        rows = [line.split() for line in path.read_text().splitlines() if line.strip()]
+        if not rows or len({len(r) for r in rows}) != 1:
+            raise ValueError(f'{path}: a text map needs rows of equal length')
+        try:
+            grid = np.array(rows, dtype=np.int64)
+        except ValueError as exc:
+            raise ValueError(f'{path}: a text map holds whole numbers only ({exc})') from exc
+    if grid.ndim != 2 or grid.size == 0 or not np.issubdtype(grid.dtype, np.integer):
+        raise ValueError(
+            f'{path}: a map is a 2-D integer array of entity indices, '
+            f'got {grid.dtype} {grid.shape}'
+        )
+    return grid.astype(np.int64)
 
 
 def summary(g: Grounding) -> dict:
