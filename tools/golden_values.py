@@ -5,13 +5,15 @@
 # https://opensource.org/licenses/MIT.
 
 """
-Every shipped checkpoint's outputs on a fixed set of inputs, written once to a file.
+Every shipped checkpoint's outputs on a fixed set of inputs: a check for a restructuring.
 
-`python test/golden_values.py` writes test/data/golden_values.npz, `--check` prints the
-largest difference from it; test_golden.py loads every checkpoint anew and compares. A
-restructuring that changes no behaviour leaves them equal to the bit on the machine that
-wrote the file (max abs difference 0); the test holds a float tolerance, since another CPU
-may order sums otherwise.
+Before a change that must not change behaviour, write them; after it, check them:
+
+    .venv/bin/python tools/golden_values.py write /tmp/golden.npz
+    .venv/bin/python tools/golden_values.py check /tmp/golden.npz   # max abs difference: 0.0
+
+On one machine an unchanged behaviour gives 0 to the bit. The file is not kept in the
+repository: it is the code's own output, and another CPU may order float sums otherwise.
 """
 
 from pathlib import Path
@@ -19,7 +21,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-GOLDEN = Path(__file__).resolve().parent / 'data' / 'golden_values.npz'
 INSTRUCTIONS = [
     'reach cell two below the westernmost rock',
     'go to the closest star to the house',
@@ -91,9 +92,9 @@ def all_outputs() -> dict[str, np.ndarray]:
     return out
 
 
-def differences() -> dict[str, float]:
-    """Max abs difference per key between the file and the code as it is now."""
-    with np.load(GOLDEN) as golden:
+def differences(path: Path) -> dict[str, float]:
+    """Return the max abs difference per output between the file and the code as it is now."""
+    with np.load(path) as golden:
         now = all_outputs()
         assert sorted(golden.files) == sorted(now), 'the checkpoints or inputs changed'
         return {k: float(np.abs(golden[k] - now[k]).max()) for k in golden.files}
@@ -102,10 +103,13 @@ def differences() -> dict[str, float]:
 if __name__ == '__main__':
     import sys
 
-    if sys.argv[1:] == ['--check']:
-        worst = max(differences().values())
+    if len(sys.argv) != 3 or sys.argv[1] not in ('write', 'check'):
+        sys.exit('usage: golden_values.py write|check FILE.npz')
+    path = Path(sys.argv[2])
+    if sys.argv[1] == 'check':
+        worst = max(differences(path).values())
         print(f'max abs difference over every output: {worst}')
         sys.exit(worst != 0)
-    GOLDEN.parent.mkdir(exist_ok=True)
-    np.savez_compressed(GOLDEN, **all_outputs())
-    print(f'wrote {GOLDEN}')
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **all_outputs())
+    print(f'wrote {path}')
