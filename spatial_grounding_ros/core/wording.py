@@ -67,14 +67,20 @@ COUNTS = frozenset('one two three four'.split())
 CELL_BEFORE = frozenset('reach the a that this'.split())
 
 
-def _rewrites() -> list[tuple[tuple[str, ...], tuple[str, ...]]]:
-    """Every (wording, canonical words), longest wording first."""
-    pairs = [
-        (tuple(tokenize(w)), tuple(tokenize(canon)))
-        for canon, wordings in PHRASES.items()
-        for w in wordings
-    ]
-    return sorted(pairs, key=lambda p: -len(p[0]))
+def _rewrites() -> dict[str, list[tuple[tuple[str, ...], tuple[str, ...]]]]:
+    """Return every (wording, canonical words) by the wording's first word, longest first."""
+    pairs = sorted(
+        (
+            (tuple(tokenize(w)), tuple(tokenize(canon)))
+            for canon, wordings in PHRASES.items()
+            for w in wordings
+        ),
+        key=lambda p: -len(p[0]),
+    )
+    out: dict[str, list] = {}
+    for wording, canon in pairs:
+        out.setdefault(wording[0], []).append((wording, canon))
+    return out
 
 
 REWRITES = _rewrites()
@@ -93,7 +99,7 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
         if words[i] in UNITS and out and out[-1] in COUNTS and i not in keep:
             i += 1
             continue
-        for wording, canon in REWRITES:
+        for wording, canon in REWRITES.get(words[i], ()):
             n = len(wording)
             if canon == ('reach',) and out:
                 continue  # a verb opens a request: mid-sentence, "head" or "find" is no verb
