@@ -205,6 +205,11 @@ def without_unknown(words: list[str], known, mentions: list[Mention]):
     return [words[i] for i in kept], moved
 
 
+def said(table: EntityTable, kind: int) -> str:
+    """Return a kind's name as words ('trash_can': 'trash can')."""
+    return table.names[kind].replace('_', ' ')
+
+
 def structural_reason(
     table: EntityTable,
     grid: np.ndarray,
@@ -217,7 +222,7 @@ def structural_reason(
         if m.kind in table.obstacles:
             continue
         if not (grid == m.kind).any():
-            return f'referent-missing: {table.names[m.kind]}'
+            return f'referent-missing: {said(table, m.kind)}'
     word = unknown_landmark(words, known, mentions)
     if word is not None:
         return f'unknown-landmark: {word}'
@@ -230,5 +235,5 @@ def structural_reason(
     for m in mentions:
         if m.kind not in table.obstacles and ambiguous(grid, words, m, mentions):
             n = count_objects(grid, m.kind)
-            return f'ambiguous: {n} {table.names[m.kind]}s'
+            return f'ambiguous: {n} {said(table, m.kind)}s'
     return None
