@@ -219,7 +219,7 @@ def run_pipeline(graph, namespace, instructions):
         timeout=30,
     ), 'the nodes never matched the probe'
     probe.map_pub.publish(slam_message())
-    assert graph.wait_for(lambda: probe.grid() is not None, timeout=10), 'no entity_map'
+    assert graph.wait_for(lambda: probe.grid() is not None), 'no entity_map'
     probe.landmarks_pub.publish(markers())
     assert graph.wait_for(
         lambda: np.array_equal(probe.grid(), EXPECTED) and held(probe, namespace), timeout=15
@@ -230,7 +230,7 @@ def run_pipeline(graph, namespace, instructions):
     for text in instructions:
         before = len(probe.goals)
         probe.instruction_pub.publish(String(data=text))
-        assert graph.wait_for(lambda: len(probe.goals) > before, timeout=15), (
+        assert graph.wait_for(lambda: len(probe.goals) > before), (
             text,
             [s.message for s in probe.diagnostics[-3:]],
         )
@@ -280,24 +280,24 @@ def test_marker_actions_frames_and_unknown_names(ros_context):
     graph = ros_context
     mapper(graph, namespace)
     probe = graph.add(make_probe(graph.context, namespace))
-    assert graph.wait_for(lambda: probe.landmarks_pub.get_subscription_count() > 0, 15)
+    assert graph.wait_for(lambda: probe.landmarks_pub.get_subscription_count() > 0)
     probe.map_pub.publish(slam_message())
     probe.landmarks_pub.publish(markers())
-    assert graph.wait_for(lambda: np.array_equal(probe.grid(), EXPECTED), 15)
+    assert graph.wait_for(lambda: np.array_equal(probe.grid(), EXPECTED))
     delete = MarkerArray(markers=[Marker(ns='landmarks', id=0, action=Marker.DELETE)])
     probe.landmarks_pub.publish(delete)
-    assert graph.wait_for(lambda: (probe.grid() == DESK).sum() == 0, 10)
+    assert graph.wait_for(lambda: (probe.grid() == DESK).sum() == 0)
     assert (probe.grid() == CHAIR).sum() == 2
     probe.landmarks_pub.publish(MarkerArray(markers=[Marker(action=Marker.DELETEALL)]))
-    assert graph.wait_for(lambda: set(np.unique(probe.grid())) == {FLOOR, WALL, UNKNOWN}, 10)
+    assert graph.wait_for(lambda: set(np.unique(probe.grid())) == {FLOOR, WALL, UNKNOWN})
     odd = markers()
     odd.markers[0].text = 'piano'
     odd.markers[1].header.frame_id = 'odom'
     probe.landmarks_pub.publish(odd)
     warn = DiagnosticStatus.WARN
-    assert graph.wait_for(lambda: probe.said('landmarks', warn, "'piano' is not a kind"), 10)
+    assert graph.wait_for(lambda: probe.said('landmarks', warn, "'piano' is not a kind"))
     assert probe.said('landmarks', warn, "in frame 'odom', not the map's 'map'")
-    assert graph.wait_for(lambda: (probe.grid() == PRINTER).sum() == 1, 10)
+    assert graph.wait_for(lambda: (probe.grid() == PRINTER).sum() == 1)
     assert (probe.grid() == DESK).sum() == 0 and (probe.grid() == FRIDGE).sum() == 0
 
 
@@ -318,9 +318,9 @@ def test_landmarks_file(ros_context, tmp_path):
     graph = ros_context
     mapper(graph, namespace, landmarks_file=str(path))
     probe = graph.add(make_probe(graph.context, namespace))
-    assert graph.wait_for(lambda: probe.map_pub.get_subscription_count() > 0, 15)
+    assert graph.wait_for(lambda: probe.map_pub.get_subscription_count() > 0)
     probe.map_pub.publish(slam_message())
-    assert graph.wait_for(lambda: np.array_equal(probe.grid(), EXPECTED), 15), probe.grid()
+    assert graph.wait_for(lambda: np.array_equal(probe.grid(), EXPECTED)), probe.grid()
 
 
 @pytest.mark.parametrize(

@@ -10,6 +10,9 @@ The gridworld node over real DDS.
 It publishes an episode (map in the OccupancyGrid orientation, instruction, truth), moves on
 actions, walks to a goal_pose, and answers bad input with a warning diagnostic while it keeps
 serving. Plus the closed-loop demo.
+
+Every wait is for an event (a message, a service answer), with a generous timeout that only
+fails a test when the event never comes. No assertion bounds an elapsed time.
 """
 
 import os
@@ -93,10 +96,11 @@ class Probe(rclpy.node.Node):
             self.got['diag'].append(msg)
 
 
-def spin_until(executor, cond, timeout=10.0):
+def spin_until(executor, cond, timeout=60.0):
+    """Spin until `cond()` holds; fail only if it never does within the (generous) timeout."""
     end = time.monotonic() + timeout
     while not cond():
-        assert time.monotonic() < end, 'timed out'
+        assert time.monotonic() < end, f'waited {timeout:g} s and it never happened'
         executor.spin_once(timeout_sec=0.02)
 
 
@@ -226,8 +230,9 @@ def test_closed_loop_demo(tmp_path, capsys):
 
     The grounder hears the first instruction as
     it is published (no episode is restarted): the bag holds exactly one instruction and one
-    goal per episode. Its agent poses were logged on reception, although this process drew a
-    PNG between episodes.
+    goal per episode. Its agent poses carry a publish time and a later log time, although this
+    process drew a PNG between episodes (test_bag_recorder.py holds the recorder's thread to
+    show that the log time is the reception, not when the callback ran).
     """
     from spatial_grounding_ros.ros.demo import run_demo
 
@@ -256,12 +261,12 @@ def test_closed_loop_demo(tmp_path, capsys):
     make_reader = pytest.importorskip('mcap.reader', reason='pip install mcap').make_reader
     [mcap_file] = (tmp_path / 'demo_bag').glob('*.mcap')
     with open(mcap_file, 'rb') as stream:
-        delays = [
-            m.log_time - m.publish_time
+        times = [
+            (m.publish_time, m.log_time)
             for _, c, m in make_reader(stream).iter_messages()
             if c.topic.endswith('/agent_pose')
         ]
-    assert delays and max(delays) < 0.5e9, max(delays) / 1e9
+    assert times and all(0 < sent <= logged for sent, logged in times), times
 
 
 @pytest.mark.parametrize(

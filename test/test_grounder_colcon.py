@@ -183,15 +183,15 @@ def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_en
             timeout=45,
         )
         assert process.poll() is None, process.stdout.read()
-        assert graph.wait_for(probe.connected, timeout=15)
+        assert graph.wait_for(probe.connected)
 
         world = generate(1, seed=5, mode='global')
         grid, text = world.grids[0], world.instructions[0]
         message = probe.publish_map(grid)
-        assert graph.wait_for(lambda: probe.holds(message), timeout=15)
+        assert graph.wait_for(lambda: probe.holds(message))
         before = probe.counts()
         probe.publish_instruction(text)
-        assert graph.wait_for(lambda: probe.new('goals', before), timeout=15)
+        assert graph.wait_for(lambda: probe.new('goals', before))
         expected = Grounder.from_checkpoint(str(checkpoint)).ground(grid, text).goal
         position = probe.new('goals', before)[0].pose.position
         assert (position.x, position.y) == pytest.approx(

@@ -56,10 +56,10 @@ def test_console_grounder_answers_test_maps_like_the_python_api(data_dir, ros_co
             # the map and the instruction travel on different topics: send the instruction
             # once the node says (OK diagnostic with the map's stamp) that it holds this map
             message = probe.publish_map(grid)
-            assert graph.wait_for(lambda: probe.holds(message), timeout=15), text
+            assert graph.wait_for(lambda: probe.holds(message)), text
             before = probe.counts()
             probe.publish_instruction(text)
-            assert graph.wait_for(lambda: probe.new('goals', before), timeout=15), text
+            assert graph.wait_for(lambda: probe.new('goals', before)), text
             position = probe.new('goals', before)[0].pose.position
             centre = convert.cell_centre(tuple(int(c) for c in cell), convert.map_info(grid.shape))
             assert (position.x, position.y) == pytest.approx(centre[:2]), text

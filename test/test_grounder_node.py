@@ -65,7 +65,7 @@ def nodes(ros_module_context, checkpoint):
         )
     )
     probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
-    assert graph.wait_for(probe.connected, timeout=15), 'probe and grounder never matched'
+    assert graph.wait_for(probe.connected), 'probe and grounder never matched'
     return graph, grounder, probe
 
 

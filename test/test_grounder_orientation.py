@@ -37,7 +37,7 @@ def start(graph, namespace, overrides=()):
         )
     )
     probe = graph.add(make_probe(graph.context, namespace, grounder.get_fully_qualified_name()))
-    assert graph.wait_for(probe.connected, timeout=15)
+    assert graph.wait_for(probe.connected)
     return grounder, probe
 
 

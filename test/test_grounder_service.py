@@ -57,7 +57,7 @@ def nodes(ros_module_context):
         )
     )
     probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
-    assert graph.wait_for(probe.connected, timeout=15), 'probe and grounder never matched'
+    assert graph.wait_for(probe.connected), 'probe and grounder never matched'
     client = GroundingClient(NAMESPACE, context=graph.context)
     assert client.wait_for_server(15), 'no ground_instruction service'
     yield graph, grounder, probe, client
@@ -245,7 +245,7 @@ def test_value_map_image_is_north_up_with_the_maps_header(nodes, reference):
 def test_status_every_second_with_hardware_id(nodes):
     graph, grounder, probe, client = nodes
     before = probe.counts()
-    assert graph.wait_for(lambda: len(probe.new('statuses', before)) >= 2, timeout=10)
+    assert graph.wait_for(lambda: len(probe.new('statuses', before)) >= 2)
     status = probe.new('statuses', before)[-1]
     name = grounder.get_fully_qualified_name()
     assert status.name == f'{name}: status' and status.hardware_id == name
