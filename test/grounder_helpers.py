@@ -170,11 +170,13 @@ def make_probe(context, namespace: str, grounder_name: str):
             )
 
         def connected(self) -> bool:
-            # matched, not just seen in the graph: a diagnostic sent before the match is lost
+            # matched, not just seen in the graph: a message (an instruction, a robot pose, a
+            # diagnostic) sent before the match is lost; wait for this before the first publish
             diagnostics = self.get_publishers_info_by_topic('/diagnostics')
             return (
                 self.instruction_pub.get_subscription_count() > 0
                 and self.map_pub.get_subscription_count() > 0
+                and self.robot_pose_pub.get_subscription_count() > 0
                 and self.goal_sub.get_publisher_count() > 0
                 and any(
                     f"{p.node_namespace.rstrip('/')}/{p.node_name}" == grounder_name

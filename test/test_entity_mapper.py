@@ -127,13 +127,23 @@ def make_probe(context, namespace):
             sub = self.create_subscription
             self.entity_sub = sub(OccupancyGrid, 'entity_map', self.entity_maps.append, LATCHED)
             self.goal_sub = sub(PoseStamped, 'goal_pose', self.goals.append, 10)
-            sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 100)
+            self.diagnostics_sub = sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 100)
             self.map_pub = self.create_publisher(OccupancyGrid, 'map', LATCHED)
             self.landmarks_pub = self.create_publisher(MarkerArray, 'landmarks', 10)
             self.instruction_pub = self.create_publisher(String, 'instruction', 10)
 
         def on_diagnostics(self, msg):
             self.diagnostics += [s for s in msg.status if s.name.startswith(namespace + '/')]
+
+        def hears_diagnostics(self, nodes: int = 1) -> bool:
+            """Whether /diagnostics is matched to every publisher, `nodes` of them ours."""
+            publishers = self.get_publishers_info_by_topic('/diagnostics')
+            ours = [p for p in publishers if p.node_namespace == namespace]
+            # matched, not just seen: a WARN sent before the match would be lost
+            return (
+                len(ours) >= nodes
+                and self.diagnostics_sub.get_publisher_count() >= len(publishers)
+            )
 
         def grid(self) -> np.ndarray | None:
             from spatial_grounding_ros.ros import convert
@@ -215,8 +225,8 @@ def run_pipeline(graph, namespace, instructions):
         and probe.map_pub.get_subscription_count() > 0
         and probe.instruction_pub.get_subscription_count() > 0
         and probe.goal_sub.get_publisher_count() > 0
-        and probe.entity_sub.get_publisher_count() > 0,
-        timeout=30,
+        and probe.entity_sub.get_publisher_count() > 0
+        and probe.hears_diagnostics(nodes=2),
     ), 'the nodes never matched the probe'
     probe.map_pub.publish(slam_message())
     assert graph.wait_for(lambda: probe.grid() is not None), 'no entity_map'
@@ -280,7 +290,11 @@ def test_marker_actions_frames_and_unknown_names(ros_context):
     graph = ros_context
     mapper(graph, namespace)
     probe = graph.add(make_probe(graph.context, namespace))
-    assert graph.wait_for(lambda: probe.landmarks_pub.get_subscription_count() > 0)
+    assert graph.wait_for(
+        lambda: probe.landmarks_pub.get_subscription_count() > 0
+        and probe.map_pub.get_subscription_count() > 0
+        and probe.hears_diagnostics()
+    )
     probe.map_pub.publish(slam_message())
     probe.landmarks_pub.publish(markers())
     assert graph.wait_for(lambda: np.array_equal(probe.grid(), EXPECTED))

@@ -11,8 +11,10 @@ It publishes an episode (map in the OccupancyGrid orientation, instruction, trut
 actions, walks to a goal_pose, and answers bad input with a warning diagnostic while it keeps
 serving. Plus the closed-loop demo.
 
-Every wait is for an event (a message, a service answer), with a generous timeout that only
-fails a test when the event never comes. No assertion bounds an elapsed time.
+Every wait is for an event (a message, a match, a service), with a generous timeout that only
+fails a test when the event never comes; the probe publishes only once the node's subscriptions
+have matched its publishers, and counts on stream topics only once it is matched to the node's
+publishers. No assertion bounds an elapsed time.
 """
 
 import os
@@ -81,14 +83,39 @@ class Probe(rclpy.node.Node):
         sub(String, 'instruction', self.got['instruction'].append, LATCHED)
         sub(PoseStamped, 'true_goal', self.got['goal'].append, LATCHED)
         sub(Float32MultiArray, 'true_value_map', self.got['values'].append, LATCHED)
-        sub(PoseStamped, 'agent_pose', self.got['pose'].append, STREAM)
-        sub(Float32, 'reward', self.got['reward'].append, STREAM)
-        sub(Bool, 'terminated', self.got['terminated'].append, STREAM)
-        sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 10)
+        # not latched: what the node sends before these match is lost to the probe
+        self.streams = [
+            sub(PoseStamped, 'agent_pose', self.got['pose'].append, STREAM),
+            sub(Float32, 'reward', self.got['reward'].append, STREAM),
+            sub(Bool, 'terminated', self.got['terminated'].append, STREAM),
+        ]
+        self.diagnostics = sub(DiagnosticArray, '/diagnostics', self.on_diagnostics, 10)
         self.action = self.create_publisher(Int32, 'action', STREAM)
         self.goal = self.create_publisher(PoseStamped, 'goal_pose', 10)
         self.next = self.create_client(Trigger, 'next_episode')
         self.reset = self.create_client(Trigger, 'reset_episode')
+
+    def connected(self) -> bool:
+        """
+        Tell whether the gridworld and this probe are matched both ways.
+
+        The node's action and goal_pose subscriptions have matched the probe's publishers (a
+        message published before that is lost), the probe's stream subscriptions and its
+        /diagnostics subscription have matched the node's publishers, and both services are
+        there.
+        """
+        diagnostics = self.get_publishers_info_by_topic('/diagnostics')
+        return (
+            self.action.get_subscription_count() > 0
+            and self.goal.get_subscription_count() > 0
+            and all(s.get_publisher_count() > 0 for s in self.streams)
+            and any(
+                p.node_namespace == NAMESPACE and p.node_name == 'gridworld' for p in diagnostics
+            )
+            and self.diagnostics.get_publisher_count() >= len(diagnostics)
+            and self.next.service_is_ready()
+            and self.reset.service_is_ready()
+        )
 
     def on_diagnostics(self, msg):
         # /diagnostics is global: keep this namespace's gridworld only
@@ -120,9 +147,11 @@ def test_episode_actions_goal_walk_and_bad_input(ros):
     spin_until(
         executor, lambda: got['map'] and got['instruction'] and got['goal'] and got['values']
     )
+    spin_until(executor, probe.connected)
     # agent poses are not latched: restart the episode now that the probe listens
+    n_pose = len(got['pose'])
     future = probe.reset.call_async(Trigger.Request())
-    spin_until(executor, lambda: future.done() and got['pose'])
+    spin_until(executor, lambda: future.done() and len(got['pose']) > n_pose)
     data = generate(3, seed=5, mode='local')
     # the latched episode: data-set row 0 is the map's top (largest y) row
     grid = convert.occupancy_grid_to_grid(got['map'][-1], 10**6)
@@ -194,7 +223,10 @@ def test_sim_time_without_clock_still_starts_and_walks(ros):
     make(GridWorldNode, namespace=NAMESPACE, parameter_overrides=params)
     probe = make(Probe)
     got = probe.got
-    spin_until(executor, lambda: got['instruction'] and got['pose'] and got['map'])
+    # the latched episode shows that the first one started (the start timer fired); its start
+    # pose is not latched, and the walk's poses come once the probe is matched
+    spin_until(executor, lambda: got['instruction'] and got['map'] and got['goal'])
+    spin_until(executor, probe.connected)
     assert got['map'][-1].header.stamp.sec == 0 and got['map'][-1].header.stamp.nanosec == 0
     info = got['map'][-1].info
     target = convert.point_to_cell(
