@@ -25,10 +25,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .core.checks import structural_reason
+from .core.checks import offset_before, structural_reason
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from .core.footprints import reduce_footprints, side_of
 from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
+from .core.units import offsets
 from .core.wording import canonical, drop_unknown, wording_words
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
@@ -89,6 +91,20 @@ def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | No
     return EntityTable.from_yaml(entities)
 
 
+def shifted(values: np.ndarray, offset: tuple[int, int]) -> np.ndarray:
+    """Return a value map moved by (rows, cols), the cells it leaves at its lowest value."""
+    if offset == (0, 0):
+        return values
+    out = np.full_like(values, values.min())
+    h, w = values.shape
+    dr, dc = offset
+    if abs(dr) < h and abs(dc) < w:
+        out[max(dr, 0):h + min(dr, 0), max(dc, 0):w + min(dc, 0)] = values[
+            max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)
+        ]
+    return out
+
+
 def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
     """Return the cell of any of `kinds` nearest `cell` (Euclidean), or None."""
     where = np.argwhere(np.isin(grid, kinds))
@@ -105,12 +121,15 @@ class Grounder:
         entities: EntityTable | None = None,
         min_confidence: float = 0.0,
         cached_instructions: int = 64,
+        cell_size: float | None = None,
     ):
         """
         Wrap a loaded checkpoint, for maps in `entities` (default: the checkpoint's table).
 
         A model trained on PuddleWorld reads any table (core/lexicon.Translation); others
         only their own. `min_confidence` (0..1): a grounding less sure than this declines.
+        `cell_size`: metres per cell, for distances in metres (core/units.py); a table's
+        landmarks may cover several cells (EntityTable.has_footprints, core/footprints.py).
         The text codes of the last `cached_instructions` instructions are kept (t-RNetAttn: the
         relation table over all kinds), since a node grounds the same instruction on new maps.
         """
@@ -120,7 +139,7 @@ class Grounder:
         self.model, self.vocab = loaded.model, loaded.vocab
         self.model_entities = loaded.entities
         self.entities = entities if entities is not None else loaded.entities
-        self.min_confidence = min_confidence
+        self.min_confidence, self.cell_size = min_confidence, cell_size
         self.translation = None
         if loaded.entities.domain == 'puddleworld':
             self.translation = Translation(
@@ -144,9 +163,15 @@ class Grounder:
         checkpoint: str | Path = DEFAULT_CHECKPOINT,
         entities: str | Path | EntityTable | None = None,
         min_confidence: float = 0.0,
+        cell_size: float | None = None,
     ) -> 'Grounder':
         """Load a packaged checkpoint by name or a path, for maps of any entity table."""
-        return cls(load_checkpoint(checkpoint), resolve_table(entities), min_confidence)
+        return cls(
+            load_checkpoint(checkpoint),
+            resolve_table(entities),
+            min_confidence,
+            cell_size=cell_size,
+        )
 
     def check(self, grid: np.ndarray, instruction: str) -> None:
         """Raise ValueError naming what is wrong with an input."""
@@ -197,21 +222,33 @@ class Grounder:
         return code
 
     @torch.no_grad()
-    def ground(self, grid: np.ndarray, instruction: str) -> Grounding:
+    def ground(
+        self, grid: np.ndarray, instruction: str, cell_size: float | None = None
+    ) -> Grounding:
+        """
+        Ground an instruction on a grid of this grounder's table.
+
+        `cell_size` (metres per cell; default: the grounder's) turns distances in metres
+        into cells; a distance in metres without one raises ValueError.
+        """
         self.check(grid, instruction)
         grid = np.asarray(grid, dtype=np.int64)
-        words = tokenize(instruction)
+        distances = offsets(instruction, self.cell_size if cell_size is None else cell_size)
+        words = tokenize(distances.text)
         if self.translation is not None:
-            translated = self.translation(grid, instruction)
+            translated = self.translation(grid, distances.model_text)
             model_grid, model_text = translated.grid, translated.instruction
             mentions = list(translated.mentions)
+            if self.entities.has_footprints:
+                model_grid = self.anchored(model_grid, translated, distances.model_text)
         else:
-            model_grid, model_text, mentions = grid, instruction, self.lexicon.mentions(words)
+            model_text = distances.model_text
+            model_grid, mentions = grid, self.lexicon.mentions(tokenize(model_text))
         model_text = self.reword(model_text)
         values, aux = self.model.ground(
             torch.as_tensor(model_grid)[None], self.text_code(model_text), return_aux=True
         )
-        values = values[0].numpy()
+        values = shifted(values[0].numpy(), distances.extra)
         best, confidence, alternatives = self.judge(values)
         reason = structural_reason(self.entities, grid, words, mentions, self.known)
         if reason is None and int(grid[best]) in self.entities.obstacles:
@@ -236,6 +273,22 @@ class Grounder:
             referent=nearest_cell(grid, [m.kind for m in mentions], best),
             model_instruction=model_text,
         )
+
+    def anchored(self, model_grid: np.ndarray, translated, text: str) -> np.ndarray:
+        """
+        Return the model's grid with each named landmark's footprint reduced to its anchor.
+
+        The side each landmark's offset leaves it on is read from the words before its
+        mention (core/footprints.py).
+        """
+        words = tokenize(text)
+        sides, previous = {}, 0
+        for m in translated.mentions:
+            offset = offset_before(words, previous, m.start)
+            previous = m.end
+            if m.kind in translated.kinds:
+                sides.setdefault(translated.kinds[m.kind], side_of(offset))
+        return reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
 
     def reword(self, text: str) -> str:
         """

@@ -10,8 +10,9 @@ The entity mapper over real DDS: a SLAM map and landmarks -> entity_map -> the g
 A synthetic SLAM map (0.05 m cells, origin (-1.5, 2.0), walls, a thin partition, unknown
 regions) and landmarks as markers (a desk of 3x2 cells, a fridge, a printer as a text marker,
 two chairs) go through the entity_mapper node at 0.25 m cells and the grounder node on the
-office table; offset and extreme instructions give a goal_pose within half a cell of the true
-metric goal. Also: landmarks_file, DELETE/DELETEALL, warnings, the config and launch files.
+office table; offset, extreme, metric and footprint instructions give a goal_pose within half a
+cell of the true metric goal. Also: landmarks_file, DELETE/DELETEALL, warnings, the config and
+launch files.
 
 Run as a script, it draws docs/slam_to_goal.png from what the nodes published:
     .venv/bin/python test/test_entity_mapper.py docs/slam_to_goal.png
@@ -252,6 +253,11 @@ INSTRUCTIONS = {  # instruction -> its goal cell (data-set row, col) on EXPECTED
     'reach the cell two below the printer': (6, 5),
     'reach the westernmost chair': (2, 3),
     'reach the cell three below the fridge': (7, 2),
+    # metres, at the entity map's 0.25 m cells, from one-cell landmarks' centres
+    'go one metre east of the printer': (4, 9),
+    'stop half a metre north of the fridge': (2, 2),
+    # the desk covers rows 7-8, columns 2-4: "above" it is above the middle of its top row
+    'reach the cell above the desk': (6, 3),
 }
 
 

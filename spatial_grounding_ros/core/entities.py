@@ -79,6 +79,9 @@ class EntityTable:
     # other words for each kind, aligned with names ("fridge": ("refrigerator",)); a table
     # without any is (), so tables written before aliases existed compare equal
     aliases: tuple[tuple[str, ...], ...] = ()
+    # whether a landmark may cover several cells, its touching cells of one kind being one
+    # landmark (core/footprints.py); None: yes, but for PuddleWorld's one-cell objects
+    footprints: bool | None = None
 
     def __len__(self) -> int:
         return len(self.names)
@@ -89,6 +92,11 @@ class EntityTable:
     def aliases_of(self, kind: int) -> tuple[str, ...]:
         return self.aliases[kind] if self.aliases else ()
 
+    @property
+    def has_footprints(self) -> bool:
+        """Return whether the table's landmarks may cover several cells (`footprints`)."""
+        return self.domain != 'puddleworld' if self.footprints is None else self.footprints
+
     def to_dict(self) -> dict:
         d = {
             'domain': self.domain,
@@ -98,6 +106,8 @@ class EntityTable:
         }
         if any(self.aliases):
             d['aliases'] = {n: list(a) for n, a in zip(self.names, self.aliases) if a}
+        if self.footprints is not None:
+            d['footprints'] = self.footprints
         return d
 
     @classmethod
@@ -110,6 +120,7 @@ class EntityTable:
                 tuple(int(i) for i in d['obstacles']),
                 int(d['embed_dim']),
                 aliases_by_kind(names, d.get('aliases') or {}),
+                None if d.get('footprints') is None else bool(d['footprints']),
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(

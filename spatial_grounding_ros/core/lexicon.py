@@ -23,6 +23,7 @@ from typing import Iterable
 import numpy as np
 
 from .entities import EntityTable
+from .footprints import footprints
 from .text import tokenize
 
 # only a name this long is read through a typo: shorter ones are one edit from too many words
@@ -209,19 +210,7 @@ def count_objects(grid: np.ndarray, kind: int) -> int:
 
     A landmark drawn over several cells (a robot map's footprint) is one landmark.
     """
-    left = {(int(r), int(c)) for r, c in np.argwhere(grid == kind)}
-    count = 0
-    while left:
-        count += 1
-        todo = [left.pop()]
-        while todo:
-            r, c = todo.pop()
-            for dr in (-1, 0, 1):
-                for dc in (-1, 0, 1):
-                    if (r + dr, c + dc) in left:
-                        left.remove((r + dr, c + dc))
-                        todo.append((r + dr, c + dc))
-    return count
+    return len(footprints(grid, kind))
 
 
 @dataclass(frozen=True)

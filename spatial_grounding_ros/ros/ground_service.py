@@ -59,7 +59,7 @@ def answer(node, request, response):
         else:
             grid = convert.occupancy_grid_to_grid(map_msg, node.param('max_cells'))
             node.grounder.check_grid(grid)
-        result = node.run_grounder(grid, request.instruction)
+        result = node.run_grounder(grid, request.instruction, map_msg)
     except Exception as exc:  # noqa: BLE001 - an answer, never a crash of the node
         response.success = False
         response.reason = str(exc) if isinstance(exc, ValueError) else (

@@ -427,9 +427,10 @@ class GrounderNode(LifecycleNode):
         if np.isfinite(yaw):
             self.robot_yaw = yaw
 
-    def run_grounder(self, grid: np.ndarray, text: str) -> Grounding:
+    def run_grounder(self, grid: np.ndarray, text: str, map_msg: OccupancyGrid) -> Grounding:
         self.grounder.min_confidence = self.param('min_confidence')  # settable at run time
-        return self.grounder.ground(grid, text)
+        # the map's cell size turns "two metres south of the sink" into cells
+        return self.grounder.ground(grid, text, cell_size=map_msg.info.resolution)
 
     def output_header(self, map_msg: OccupancyGrid) -> Header:
         # the map's stamp: the maps are that map's cells, placed where the map was then
@@ -440,7 +441,7 @@ class GrounderNode(LifecycleNode):
 
     def ground(self) -> None:
         try:
-            result = self.run_grounder(self.grid, self.instruction)
+            result = self.run_grounder(self.grid, self.instruction, self.map_msg)
         except Exception as exc:  # noqa: BLE001 - e.g. out of memory in torch: report, go on
             self.report(
                 'grounding',

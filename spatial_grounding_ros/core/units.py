@@ -1,0 +1,116 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Distances in metres, and counts past what the network learned.
+
+"Two metres south of the sink" on a map of 0.25 m cells is eight cells below it. A
+distance in metres (m, metres, meters, cm; digits, decimals or a number word) becomes a count
+of cells at the map's cell size, rounded, at least one. The network learned counts up to four
+cells; a longer count along a direction grounds as "four" that way and the rest is added to
+the goal afterwards (`Offsets.extra`), so "seven below the rock" lands three cells past the
+network's "four below the rock".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import re
+
+from .checks import DIRECTIONS
+
+LEARNED_COUNT = 4  # the longest count the network was trained on
+COUNT_WORDS = {1: 'one', 2: 'two', 3: 'three', 4: 'four'}
+_NUMBER_WORDS = {
+    w: n
+    for n, w in enumerate(
+        'one two three four five six seven eight nine ten eleven twelve'.split(), 1
+    )
+}
+_AMOUNT = r'(?P<n>\d+(?:\.\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + ')'
+_METRES = {'m': 1.0, 'metre': 1.0, 'meter': 1.0, 'cm': 0.01, 'centimetre': 0.01,
+           'centimeter': 0.01}  # fmt: skip
+_METRIC = re.compile(
+    rf'\b{_AMOUNT}\s*(?P<unit>centimetres?|centimeters?|cm|metres?|meters?|m)\b', re.IGNORECASE
+)
+_UNIT_WORD = r'(?:\s+(?:cells?|squares?|steps?|spaces?|tiles?|spots?))?'
+# a count followed, after an optional unit, by the direction it goes
+_COUNT = re.compile(
+    rf'\b(?P<n>\d+|{"|".join(_NUMBER_WORDS)}){_UNIT_WORD}(?P<rest>\s+(?:to\s+the\s+)?'
+    rf'(?P<dir>{"|".join(DIRECTIONS)})\b)',
+    re.IGNORECASE,
+)
+
+
+@dataclass(frozen=True)
+class Offsets:
+    """An instruction's distances in cells: in full, as the network reads it, and the rest."""
+
+    text: str  # every distance in cells, in full ("8 below the sink"): what the checks read
+    model_text: str  # counts past LEARNED_COUNT cut to it: what the network reads
+    extra: tuple[int, int]  # (rows, cols) to add to the network's goal
+
+
+def _amount(text: str) -> float:
+    text = text.lower()
+    if text.startswith('half'):
+        return 0.5
+    if text in ('a', 'an'):
+        return 1.0
+    return float(_NUMBER_WORDS.get(text) or text)
+
+
+def in_cells(instruction: str, cell_size: float | None) -> str:
+    """
+    Return the instruction with each distance in metres as a count of cells.
+
+    Raises ValueError for a distance in metres when the cell size is not known.
+    """
+
+    def cells(match: re.Match) -> str:
+        if cell_size is None:
+            raise ValueError(
+                f'{match.group(0)!r} is a distance in metres; grounding it needs the map cell '
+                'size (Grounder(cell_size=...) or ground(..., cell_size=...))'
+            )
+        unit = match.group('unit').lower().rstrip('s')
+        metres = _amount(match.group('n')) * _METRES[unit]
+        return str(max(1, round(metres / cell_size)))
+
+    if cell_size is not None and not cell_size > 0:
+        raise ValueError(f'cell_size must be a positive number of metres, got {cell_size}')
+    return _METRIC.sub(cells, instruction)
+
+
+def offsets(instruction: str, cell_size: float | None = None) -> Offsets:
+    """
+    Return an instruction's distances in cells (in_cells), split at LEARNED_COUNT.
+
+    Both texts word a count as one word and drop its unit ("2 cells below": "two below"), so
+    their words line up.
+    """
+    text = in_cells(instruction, cell_size)
+    extra = [0, 0]
+
+    def count(match: re.Match) -> int:
+        n = match.group('n').lower()
+        return _NUMBER_WORDS.get(n) or int(n)
+
+    def full(match: re.Match) -> str:
+        n = count(match)
+        return COUNT_WORDS.get(n, str(n)) + match.group('rest')
+
+    def cut(match: re.Match) -> str:
+        n = count(match)
+        step = DIRECTIONS[match.group('dir').lower()]
+        if n > LEARNED_COUNT:
+            extra[0] += (n - LEARNED_COUNT) * step[0]
+            extra[1] += (n - LEARNED_COUNT) * step[1]
+            n = LEARNED_COUNT
+        return COUNT_WORDS.get(n, str(n)) + match.group('rest')
+
+    model_text = _COUNT.sub(cut, text)
+    return Offsets(_COUNT.sub(full, text), model_text, (extra[0], extra[1]))
