@@ -41,7 +41,7 @@ def test_suite_hit_and_md_are_the_grounders_answers(tmp_path):
     for family in FAMILIES:
         for size in (7, 12):
             worlds = suite.suite_worlds(family, size, 4, 5)
-            found = [(grounder.ground(g, t), goal) for g, t, goal in worlds]
+            found = [(grounder.ground(w.grid, w.instruction), w.goal) for w in worlds]
             d = [abs(r.best[0] - goal[0]) + abs(r.best[1] - goal[1]) for r, goal in found]
             hits = [r.goal == tuple(goal) for r, goal in found]
             declined = [r.goal is None for r, _ in found]
@@ -68,7 +68,7 @@ def test_suite_hit_and_md_are_the_grounders_answers(tmp_path):
 
 def test_suite_worlds_are_the_family_and_size_asked_for():
     for family in FAMILIES:
-        for grid, text, goal in suite.suite_worlds(family, 9, 3, seed=0):
+        for grid, text, goal, _ in suite.suite_worlds(family, 9, 3, seed=0):
             assert grid.shape == (9, 9)
             if family not in ('row-col', 'between'):
                 assert (text, goal) in family_goals(grid, family)

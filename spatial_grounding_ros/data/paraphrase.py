@@ -49,3 +49,36 @@ def paraphrase(instruction: str, rng: np.random.Generator, names=()) -> str:
     opening = OPENINGS[rng.integers(len(OPENINGS))]
     closing = CLOSINGS[rng.integers(len(CLOSINGS))]
     return ' '.join(w for w in (opening, *out, closing) if w)
+
+
+# cell sizes a robot's map has (metres): the metric suite draws one per instruction
+CELL_SIZES = (0.05, 0.1, 0.25, 0.5, 1.0)
+_COUNT_VALUES = {w: n for n, w in enumerate(('one', 'two', 'three', 'four'), 1)}
+
+
+def say_metres(metres: float, rng: np.random.Generator) -> str:
+    """Return a distance as people say it: '0.5 metres', '50 cm', '2 m', 'two meters'."""
+    if metres < 1 and rng.random() < 0.5:
+        return f'{round(metres * 100)} cm'
+    number = f'{metres:g}'
+    words = {1.0: 'one', 2.0: 'two', 3.0: 'three', 4.0: 'four'}
+    if metres in words and rng.random() < 0.5:
+        number = words[metres]
+    unit = ('metres', 'meters', 'm')[rng.integers(3)]
+    if metres == 1.0 and unit != 'm':
+        unit = unit[:-1]
+    return f'{number} {unit}'
+
+
+def in_metres(instruction: str, rng: np.random.Generator) -> tuple[str, float]:
+    """
+    Return the instruction with each count of cells said in metres, and the cell size drawn.
+
+    "reach cell two below rock" on 0.25 m cells: "reach cell 0.5 metres below rock".
+    """
+    cell_size = float(CELL_SIZES[rng.integers(len(CELL_SIZES))])
+    words = [
+        say_metres(_COUNT_VALUES[w] * cell_size, rng) if w in _COUNT_VALUES else w
+        for w in tokenize(instruction)
+    ]
+    return ' '.join(words), cell_size

@@ -78,8 +78,8 @@ def clear(grounder: Grounder, sizes, n: int, progress: bool) -> dict:
     out = {}
     for size in tqdm(sizes, desc='suite', disable=not progress):
         worlds = [w for f in FAMILIES for w in suite_worlds(f, size, n, 0)]
-        out[str(size)] = answered([grounder.ground(g, t) for g, t, _ in worlds],
-                                  [goal for *_, goal in worlds])
+        out[str(size)] = answered([grounder.ground(w.grid, w.instruction) for w in worlds],
+                                  [w.goal for w in worlds])
     return out
 
 

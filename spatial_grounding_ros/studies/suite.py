@@ -22,11 +22,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from tqdm import tqdm
 
 from ..core.entities import EntityTable, PUDDLEWORLD
+from ..data.footprints import grow, separate, unexplored
 from ..data.generator import (
     COMPOSITIONAL_FAMILIES,
     FAMILIES,
@@ -34,7 +36,7 @@ from ..data.generator import (
     LOCAL_FAMILIES,
     sample,
 )
-from ..data.paraphrase import paraphrase
+from ..data.paraphrase import in_metres, paraphrase
 from ..data.renaming import NAMINGS, rename
 from ..grounder import Grounder, resolve_table
 from ..models.checkpoints import load_checkpoint
@@ -46,7 +48,16 @@ GROUPS = {
     'compositional': COMPOSITIONAL_FAMILIES,
 }
 DEFAULT_SIZES = (10, 32, 64)
-WORDINGS = ('plain', 'paraphrase')
+WORDINGS = ('plain', 'paraphrase', 'metric')
+
+
+class SuiteWorld(NamedTuple):
+    """One suite case: a map, an instruction, the cell it names and the map's cell size."""
+
+    grid: np.ndarray
+    instruction: str
+    goal: tuple[int, int]
+    cell_size: float | None = None  # metres per cell, for instructions in metres
 
 
 def suite_worlds(
@@ -57,13 +68,18 @@ def suite_worlds(
     table: EntityTable = PUDDLEWORLD,
     naming: str = 'name',
     wording: str = 'plain',
+    footprints: bool = False,
 ):
     """
-    Return n (grid, instruction, goal) of one family and size; the same for every model.
+    Return n SuiteWorlds of one family and size; the same for every model.
 
     In another `table`, the same layouts and goals with its kinds, named by `naming`
     (data/renaming.py: the name, an alias, or a typo of the name); with `wording`
-    'paraphrase', the instructions worded as people word them (data/paraphrase.py).
+    'paraphrase', the instructions worded as people word them, with 'metric' each count of
+    cells said in metres at a cell size drawn per world (data/paraphrase.py). In a
+    table whose landmarks have footprints, touching landmarks of a kind are one, so each
+    such group keeps one cell; `footprints` draws the landmarks over several cells and
+    leaves regions unexplored (data/footprints.py).
     """
     if wording not in WORDINGS:
         raise ValueError(f'unknown wording {wording!r}; use one of {", ".join(WORDINGS)}')
@@ -72,10 +88,27 @@ def suite_worlds(
     if table.names != PUDDLEWORLD.names or naming != 'name':
         renamer = np.random.default_rng([seed, size, FAMILIES.index(family), 1])
         worlds = [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
+    if table.has_footprints:
+        worlds = [(separate(g, goal, table), t, goal) for g, t, goal in worlds]
+    if footprints:
+        if not table.has_footprints:
+            raise ValueError(f'the {table.domain} table draws every landmark over one cell')
+        drawer = np.random.default_rng([seed, size, FAMILIES.index(family), 3])
+        worlds = [
+            (unexplored(grow(g, t, goal, table, drawer), goal, table, drawer), t, goal)
+            for g, t, goal in worlds
+        ]
+    worlds = [SuiteWorld(g, t, goal) for g, t, goal in worlds]
     if wording == 'paraphrase':
         words = np.random.default_rng([seed, size, FAMILIES.index(family), 2])
         names = {w for n in table.names for w in n.split('_')}
-        worlds = [(g, paraphrase(t, words, names), goal) for g, t, goal in worlds]
+        worlds = [w._replace(instruction=paraphrase(w.instruction, words, names)) for w in worlds]
+    elif wording == 'metric':
+        words = np.random.default_rng([seed, size, FAMILIES.index(family), 2])
+        worlds = [
+            w._replace(**dict(zip(('instruction', 'cell_size'), in_metres(w.instruction, words))))
+            for w in worlds
+        ]
     return worlds
 
 
@@ -108,6 +141,7 @@ def run_suite(
     entities: str | Path | EntityTable | None = None,
     naming: str = 'name',
     wording: str = 'plain',
+    footprints: bool = False,
 ) -> dict:
     """
     Hit and MD per family and size, per group and size, per size, and overall.
@@ -128,11 +162,11 @@ def run_suite(
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
     for family, size in tqdm(jobs, desc='suite', disable=not progress, unit='family'):
-        worlds = suite_worlds(family, size, n, seed, table, naming, wording)
-        grids = np.stack([w[0] for w in worlds])
-        texts = [w[1] for w in worlds]
-        goals = np.array([w[2] for w in worlds])
-        groundings = [grounder.ground(g, t) for g, t in zip(grids, texts)]
+        worlds = suite_worlds(family, size, n, seed, table, naming, wording, footprints)
+        grids = np.stack([w.grid for w in worlds])
+        texts = [w.instruction for w in worlds]
+        goals = np.array([w.goal for w in worlds])
+        groundings = [grounder.ground(w.grid, w.instruction, w.cell_size) for w in worlds]
         maps = np.stack([g.values for g in groundings])
         pred = np.array([g.best for g in groundings])
         d = np.abs(pred - goals).sum(1)
@@ -147,6 +181,7 @@ def run_suite(
         'entities': table.domain,
         'naming': naming,
         'wording': wording,
+        'footprints': footprints,
         'model': loaded.name,
         'seed': seed,
         'n_per_family': n,
@@ -250,6 +285,7 @@ def cmd_suite(args) -> int:
         entities=args.entities,
         naming=args.naming,
         wording=args.wording,
+        footprints=args.footprints,
     )
     if args.json:
         print(json.dumps(result))
@@ -300,6 +336,12 @@ def register_cli(sub) -> None:
         default='plain',
         choices=WORDINGS,
         help="the generator's grammar, or paraphrased as people word it (data/paraphrase.py)",
+    )
+    p.add_argument(
+        '--footprints',
+        action='store_true',
+        help='landmarks drawn over several cells and unexplored regions, as a robot map '
+        'draws them (needs --entities with a table whose landmarks have footprints)',
     )
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.add_argument('--out', default=None, help='write suite.json and failure PNGs here')
