@@ -176,7 +176,10 @@ def test_grown_worlds_keep_the_goal_named(family):
 def test_separate_keeps_one_cell_of_touching_landmarks_the_one_nearest_the_goal():
     grid = np.zeros((5, 5), dtype=np.int64)
     grid[2, 1:4] = K['chair']
-    out = separate(grid, (3, 3), OFFICE)
+    out = separate(grid, 'reach the chair', (3, 3), OFFICE)
+    assert np.argwhere(out == K['chair']).tolist() == [[2, 3]]
+    # "left of the easternmost chair", the goal on a chair touching it: the referent stays
+    out = separate(grid, 'reach the cell to the left of the easternmost chair', (2, 2), OFFICE)
     assert np.argwhere(out == K['chair']).tolist() == [[2, 3]]
 
 

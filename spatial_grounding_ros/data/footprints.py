@@ -8,9 +8,9 @@
 Generated worlds as a robot's map draws them: landmarks over several cells, unexplored regions.
 
 In a table whose landmarks have footprints (EntityTable.has_footprints) touching cells of one
-kind are one landmark, so `separate` first leaves one cell of each touching group: the one
-nearest the goal (the answer's own landmark; taking away any other landmark keeps a unique
-extreme or closest answer unique). `grow` then draws landmarks over rectangles of 1-3 by 1-3
+kind are one landmark, so `separate` first leaves one cell of each touching group: the
+answer's own landmark (taking away any other keeps a unique extreme or closest answer
+unique). `grow` then draws landmarks over rectangles of 1-3 by 1-3
 cells, placed so that the cell they were is the footprint's anchor for the side the
 instruction's offset leaves them on (core/footprints.py): the goal stays the cell named.
 `unexplored` covers free cells with rectangles of the table's unknown kind, never the goal.
@@ -43,18 +43,37 @@ def unknown_kind(table: EntityTable) -> int:
     return table.obstacles[-1]
 
 
-def separate(grid: np.ndarray, goal: tuple[int, int], table: EntityTable) -> np.ndarray:
-    """Return the grid with one cell of each touching group of a landmark kind kept."""
+def separate(
+    grid: np.ndarray, instruction: str, goal: tuple[int, int], table: EntityTable
+) -> np.ndarray:
+    """
+    Return the grid with one cell of each touching group of a landmark kind kept.
+
+    A group keeps the landmark the answer is taken from (the goal less a named offset), else
+    the goal's own, else the cell nearest the goal: taking away any other landmark keeps a
+    unique extreme or closest answer unique.
+    """
+    words = tokenize(instruction)
+    referents, previous = [], 0
+    for m in Lexicon(table, COMMON_WORDS).mentions(words):
+        dr, dc = offset_before(words, previous, m.start)
+        previous = m.end
+        referents.append((goal[0] - dr, goal[1] - dc))
     out = grid.copy()
     free = free_kind(table)
     for kind in np.unique(grid):
         if kind in table.obstacles or kind == free:
             continue
         for cells in footprints(grid, int(kind)):
-            if len(cells) > 1:
-                keep = np.abs(cells - np.asarray(goal)).sum(1).argmin()
-                gone = np.delete(cells, keep, axis=0)
-                out[gone[:, 0], gone[:, 1]] = free
+            if len(cells) < 2:
+                continue
+            listed = [tuple(c) for c in cells.tolist()]
+            keep = next(
+                (listed.index(c) for c in [*referents, tuple(goal)] if c in listed),
+                int(np.abs(cells - np.asarray(goal)).sum(1).argmin()),
+            )
+            gone = np.delete(cells, keep, axis=0)
+            out[gone[:, 0], gone[:, 1]] = free
     return out
 
 

@@ -89,7 +89,7 @@ def suite_worlds(
         renamer = np.random.default_rng([seed, size, FAMILIES.index(family), 1])
         worlds = [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
     if table.has_footprints:
-        worlds = [(separate(g, goal, table), t, goal) for g, t, goal in worlds]
+        worlds = [(separate(g, t, goal, table), t, goal) for g, t, goal in worlds]
     if footprints:
         if not table.has_footprints:
             raise ValueError(f'the {table.domain} table draws every landmark over one cell')
