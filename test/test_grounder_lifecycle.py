@@ -16,6 +16,7 @@ that cannot load the checkpoint fails and leaves the node unconfigured and servi
 
 import time
 
+import numpy as np
 import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
@@ -27,7 +28,9 @@ from lifecycle_msgs.srv import ChangeState, GetState  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from spatial_grounding_ros.data.generator import generate  # noqa: E402
+from spatial_grounding_ros.ros import convert  # noqa: E402
 from spatial_grounding_ros.ros.grounder_node import GrounderNode  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
 
 WORLDS = generate(2, seed=4, mode='local')
 NO_GOAL_WAIT = 0.5  # after the diagnostic, how long a stray goal would have had to arrive
@@ -181,3 +184,83 @@ def test_autostart_is_active_at_once(ros_context, checkpoint):
     manager = LifecycleClient(graph, grounder.get_fully_qualified_name())
     assert manager.state() == 'active'
     assert State.PRIMARY_STATE_ACTIVE == 3
+
+
+@pytest.mark.parametrize('held', ['grounded', 'waiting for a map'])
+def test_reactivation_never_grounds_an_instruction_from_before_the_pause(
+    ros_context, checkpoint, held
+):
+    """
+    Check docs/ros.md's Lifecycle: deactivate drops the held instruction.
+
+    "activating again never sends a goal for an old instruction; maps are still taken and
+    held". An instruction is held either way the node holds one: grounded (then, with
+    reground_on_map_change, grounded again on each new map) or waiting for a map. Without a
+    pause the next map grounds it (the control). After deactivate and activate, neither a map
+    taken while inactive nor one after activation grounds it: the only grounding after the
+    pause is the new instruction's. (Each grounding publishes its goal and a diagnostic naming
+    the instruction; /diagnostics from one node is one reliable, ordered stream, so a stale
+    grounding's would have come before the new one's.)
+    """
+    graph = ros_context
+    grounder, probe, manager = start(graph, unique_namespace('lifecycle_drop_test'), checkpoint)
+    assert manager.transition(Transition.TRANSITION_CONFIGURE)
+    assert manager.transition(Transition.TRANSITION_ACTIVATE)
+    assert graph.wait_for(probe.connected), 'probe and grounder never matched'
+    grounder.set_parameters([Parameter('reground_on_map_change', value=True)])
+    grid = WORLDS.grids[0]
+    old, new = 'reach cell with circle', 'reach cell with star'  # both on `grid`
+
+    def said(text, level=DiagnosticStatus.WARN):
+        before = probe.counts()
+        return lambda: any(
+            s.level == level and text in s.message for s in probe.new('diagnostics', before)
+        )
+
+    def groundings(since) -> list[str]:
+        statuses = probe.new('diagnostics', since)
+        return [s.message for s in statuses if s.name.endswith(': grounding')]
+
+    def hold_map(grid):
+        message = probe.publish_map(grid)
+        assert graph.wait_for(lambda: probe.holds(message)), 'no OK diagnostic for the map'
+
+    def hold_instruction(text) -> dict:
+        """Leave `text` held as `held` says, and nothing else in flight; the counts then."""
+        dropped = said('instruction is empty')
+        probe.publish_instruction(' ')  # a rejected instruction drops any held one
+        assert graph.wait_for(dropped)
+        before = probe.counts()
+        if held == 'grounded':
+            hold_map(grid)
+            probe.publish_instruction(text)
+            assert graph.wait_for(lambda: probe.new('goals', before) and groundings(before))
+        else:
+            rejected = said('entity_map rejected')
+            bad = convert.grid_to_occupancy_grid(np.full((3, 3), 99), Header(frame_id='map'))
+            probe.publish_map(message=bad)  # a rejected map drops the held one
+            assert graph.wait_for(rejected)
+            holding = said('holding instruction')
+            probe.publish_instruction(text)
+            assert graph.wait_for(holding)
+        return probe.counts()
+
+    # the control: without a pause, the held instruction is grounded on the next map
+    after = hold_instruction(old)
+    hold_map(grid)
+    assert graph.wait_for(lambda: probe.new('goals', after) and groundings(after))
+    assert 'circle' in groundings(after)[0], 'the control did not ground the held instruction'
+
+    # the pause: deactivate, a map while inactive (taken and held), activate, another map
+    after = hold_instruction(old)
+    assert manager.transition(Transition.TRANSITION_DEACTIVATE)
+    hold_map(WORLDS.grids[1])
+    assert manager.transition(Transition.TRANSITION_ACTIVATE)
+    hold_map(grid)
+    probe.publish_instruction(new)
+    assert graph.wait_for(
+        lambda: probe.new('goals', after) and any('star' in m for m in groundings(after))
+    ), 'no goal for the new instruction'
+    assert len(groundings(after)) == 1, (
+        f'grounded after the pause: {groundings(after)}, one from before the pause'
+    )
