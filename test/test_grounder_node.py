@@ -13,6 +13,7 @@ good request. One node (a seeded untrained model, so no trained checkpoint is ne
 module.
 """
 
+import math
 import time
 
 import numpy as np
@@ -149,6 +150,34 @@ def test_good_request_matches_the_python_api(nodes, reference):
         frame_id='odom',
         info=convert.map_info((10, 10), resolution=0.25, origin=(-3.0, 4.0), yaw=0.4),
     )
+
+
+@pytest.mark.parametrize(
+    'orientation',
+    [
+        (0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)),  # +90 degrees about z
+        (0.0, 0.0, math.sin(-1.25), math.cos(-1.25)),  # -2.5 rad about z
+        (0.0, 0.0, 1.2, 1.6),  # a yaw, not normalised (the node normalises an origin)
+        (math.sin(0.15), 0.0, 0.0, math.cos(0.15)),  # tilted: 0.3 rad about x
+    ],
+    ids=['yaw-90', 'yaw-minus-2.5', 'not-normalised', 'tilted'],
+)
+def test_goal_orientation_is_the_identity_on_a_rotated_origin(nodes, reference, orientation):
+    """
+    Check docs/ros.md: goal_heading `identity` faces the map frame's +x.
+
+    "(also when the grid's origin is rotated): an instruction names a place, not a heading".
+    The goal is where the rotated grid puts the cell (good_request checks the position against
+    the API), and its orientation is exactly the identity quaternion, not the origin's.
+    """
+    graph, grounder, probe = nodes
+    assert grounder.get_parameter('goal_heading').value == 'identity'  # the default
+    info = convert.map_info((10, 10), resolution=0.5, origin=(2.0, -1.0))
+    o = info.origin.orientation
+    o.x, o.y, o.z, o.w = orientation
+    goal = good_request(nodes, reference, world=1, info=info)
+    q = goal.pose.orientation
+    assert (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 1.0)
 
 
 def bad_map(grid=None, **change):
