@@ -234,7 +234,8 @@ class Translation:
     picks ("the westernmost chair") or that a relation follows ("the chair closest to the
     sofa") becomes one of the model's non-unique kinds (rock, tree, house, horse), the
     others one of its unique kinds (star ... diamond): the roles those kinds played in its
-    training. The instruction's words are kept; only the names are replaced.
+    training. The instruction's words are kept; only the names are replaced, and the names
+    of landmarks the map does not hold are left out.
     """
 
     def __init__(self, table: EntityTable, model: EntityTable, unique, nonunique):
@@ -263,7 +264,9 @@ class Translation:
         unique, nonunique = list(self.unique), list(self.nonunique)
         kinds: dict[int, int] = {}
         for m in mentions:
-            if m.kind in kinds or m.kind in self.table.obstacles:
+            # a landmark the map does not hold cannot be the referent: its name is left out
+            # of what the model reads (the grounding declines with referent-missing)
+            if m.kind in kinds or m.kind in self.table.obstacles or not (grid == m.kind).any():
                 continue
             same = self.same_kind.get(m.kind)
             if same is not None:  # a kind the model knows by name keeps it
