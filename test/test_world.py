@@ -4,7 +4,7 @@
 # license that can be found in the LICENSE file or at
 # https://opensource.org/licenses/MIT.
 
-"""World model and metrics: value iteration against the data set, PQ and MD by hand."""
+"""World model and metrics: value iteration against the data set; PQ, MD and HIT by hand."""
 
 import glob
 import pickle
@@ -210,6 +210,123 @@ def test_md_by_hand():
     true[1, 0, 0], pred[1, 3, 2] = 1, 1  # 3 + 2 away
     np.testing.assert_array_equal(world.manhattan_distances(pred, true), [0, 5])
     assert world.evaluate_maps(pred, true, np.zeros_like(true), true > 0)['md'] == 2.5
+
+
+# Five hand-built 3x3 value maps and their goals; cells are (row, col), row-major order,
+# and a tie goes to the first cell in that order (numpy's argmax, as the node's Grounder).
+HAND_PRED = np.array(
+    [
+        # a hit on an all-negative map: the largest value, -0.5, not the largest magnitude
+        [[-3.0, -2.0, -3.0], [-2.0, -0.5, -2.0], [-3.0, -2.0, -3.0]],
+        # a miss across the map: argmax (0, 2), goal (2, 0): MD 2 + 2 = 4
+        [[0.0, 1.0, 9.0], [0.0, 1.0, 2.0], [3.0, 0.0, 0.0]],
+        # a tie that holds the goal second: 7 at (0, 1) and (2, 2); the first, (0, 1), is
+        # taken, goal (2, 2): a miss, MD 2 + 1 = 3
+        [[0.0, 7.0, 0.0], [1.0, 2.0, 3.0], [0.0, 6.0, 7.0]],
+        # a tie that holds the goal first: 4 at (1, 0) and (1, 2), goal (1, 0): a hit, MD 0
+        [[0.0, 1.0, 0.0], [4.0, 0.0, 4.0], [0.0, 1.0, 0.0]],
+        # a near miss: argmax (2, 1), goal (2, 2): MD 1
+        [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 5.0, 4.9]],
+    ]
+)
+HAND_GOALS = np.array([(1, 1), (2, 0), (2, 2), (1, 0), (2, 2)])
+# HIT = 2 hits / 5 = 0.4; MD = (0 + 4 + 3 + 0 + 1) / 5 = 8 / 5 = 1.6
+HAND_HIT, HAND_MD = 0.4, 1.6
+
+
+def hand_truth():
+    """Return the true maps, rewards and terminals: value iteration, +3 at each goal."""
+    rewards, terminal = map(
+        np.stack, zip(*(world.reward_map(np.zeros((3, 3), bool), tuple(g)) for g in HAND_GOALS))
+    )
+    return world.value_iteration(rewards, terminal), rewards, terminal
+
+
+def test_hit_and_md_by_hand_with_ties_and_misses():
+    true, rewards, terminal = hand_truth()
+    np.testing.assert_array_equal(world.argmax_cells(true), HAND_GOALS)
+    np.testing.assert_array_equal(
+        world.argmax_cells(HAND_PRED), [(1, 1), (0, 2), (0, 1), (1, 0), (2, 1)]
+    )
+    np.testing.assert_array_equal(world.manhattan_distances(HAND_PRED, true), [0, 4, 3, 0, 1])
+    metrics = world.evaluate_maps(HAND_PRED, true, rewards, terminal)
+    assert metrics['hit'] == HAND_HIT and metrics['md'] == pytest.approx(HAND_MD)
+    assert metrics['n'] == 5
+
+
+def test_every_hit_and_md_agree_on_the_hand_maps():
+    """
+    The per-epoch HIT of training and the bag's HIT and MD are the same numbers.
+
+    supervised.evaluate_hit (a model that answers the hand maps) and eval-bag's
+    BagEvaluation.metrics (goal_pose cells that are the maps' argmax cells) give 0.4 and 1.6.
+    """
+    import torch
+    from spatial_grounding_ros.core.entities import PUDDLEWORLD
+    from spatial_grounding_ros.core.text import Vocabulary
+    from spatial_grounding_ros.data.bags import BagEvaluation, Episode
+    from spatial_grounding_ros.data.datasets import GroundingSet
+    from spatial_grounding_ros.training.supervised import evaluate_hit
+
+    true, rewards, terminal = hand_truth()
+    texts = ['reach cell with star'] * len(HAND_PRED)
+    data = GroundingSet(
+        'hand', PUDDLEWORLD, np.zeros((5, 3, 3), np.int64), texts, true.astype(np.float32),
+        rewards.astype(np.float32), terminal, HAND_GOALS,
+    )
+
+    class HandModel(torch.nn.Module):
+        def forward(self, grids, tokens):
+            return torch.from_numpy(HAND_PRED[: len(grids)]).float()
+
+    assert evaluate_hit(HandModel(), Vocabulary.build(texts), data) == HAND_HIT
+    bag = BagEvaluation(
+        episodes=[
+            Episode(t, tuple(int(x) for x in a), tuple(int(x) for x in g), p, v, r)
+            for t, a, g, p, v, r in zip(
+                texts, world.argmax_cells(HAND_PRED), HAND_GOALS, HAND_PRED, true, rewards
+            )
+        ]
+    )
+    metrics = bag.metrics()
+    assert metrics['hit'] == HAND_HIT and metrics['md'] == pytest.approx(HAND_MD)
+    assert metrics['pq'] == pytest.approx(
+        world.evaluate_maps(HAND_PRED, true, rewards, terminal)['pq']
+    )
+
+
+def test_pq_by_hand_on_a_two_cell_world():
+    """
+    PQ, MD, HIT and MSE worked by hand on a 1x2 world.
+
+    The goal A (terminal, reward 3) and B (reward 0) east of it. From B the four moves lead
+    to: up B, down B (off the map: stay), left A, right B (off). Score iteration from S = 0:
+    S = R at the terminal, else R + 0.9 * E_pi[S(next)], sweeps until the summed change of a
+    sweep is under 0.01; a score is the mean over the cells.
+    - `toward` (50 on A, 0 on B): pi(left | B) = 1 - 3e-22, 1.0 in float64: sweep 1 gives
+      S = (3, 0), sweep 2 S(B) = 0.9 * 3 = 2.7, sweep 3 no change: score (3 + 2.7) / 2 = 2.85.
+    - `away` (0 on A, 50 on B): pi(left | B) = 6e-22: S(B) stays 0 (to 1e-21): score 1.5.
+    - uniform (equal values): pi = 1/4 each, S(B) = 0.9 * (S(A) + 3 S(B)) / 4. Sweep k >= 2
+      gives S(B) = (27/13) (1 - 0.675^(k-1)), a change of 0.675^(k-1): 0.675^11 = 0.0133 is
+      not under 0.01, 0.675^12 = 0.0089 is, so it stops after sweep 13 with S(B) =
+      (27/13) (1 - 0.675^12) = 2.0583: score su = 2.5292.
+    PQ = (score(pred) - su) / (score(true) - su): with `toward` as the truth, `away` scores
+    (1.5 - su) / (2.85 - su) = -3.208, `toward` itself 1. MD: argmax (0, 1) against (0, 0):
+    1, no hit. MSE: (50^2 + 50^2) / 2 = 2500.
+    """
+    toward, away = np.array([[[50.0, 0.0]]]), np.array([[[0.0, 50.0]]])
+    rewards, terminal = np.array([[[3.0, 0.0]]]), np.array([[[True, False]]])
+    assert world.policy_scores(toward, rewards, terminal)[0] == pytest.approx(2.85, abs=1e-15)
+    assert world.policy_scores(away, rewards, terminal)[0] == pytest.approx(1.5, abs=1e-15)
+    su = (3 + 27 / 13 * (1 - 0.675**12)) / 2
+    uniform = np.ones_like(toward)
+    assert world.policy_scores(uniform, rewards, terminal)[0] == pytest.approx(su, rel=1e-12)
+    assert su == pytest.approx(2.5292, abs=1e-4)
+    metrics = world.evaluate_maps(away, toward, rewards, terminal)
+    assert metrics['pq'] == pytest.approx((1.5 - su) / (2.85 - su), rel=1e-9)
+    assert metrics['pq'] == pytest.approx(-3.208, abs=1e-3)
+    assert (metrics['md'], metrics['hit'], metrics['mse']) == (1.0, 0.0, 2500.0)
+    assert world.evaluate_maps(toward, toward, rewards, terminal)['pq'] == pytest.approx(1.0)
 
 
 def test_mse_is_mean_over_all_cells_of_all_maps():
