@@ -8,7 +8,8 @@
 The published results hold together.
 
 Each shipped checkpoint evaluates to its row of results/value_map.json within what another CPU can
-change, the results/*.md tables are those rows, and the README's tables are the results/*.md files.
+change, the results/*.md tables are those rows, the README's tables are the results/*.md files,
+and the figures its Results summary states in words are those of the results/*.json files.
 """
 
 import json
@@ -17,6 +18,7 @@ import re
 
 import pytest
 from spatial_grounding_ros import cli
+from spatial_grounding_ros.core.tasks import TASKS
 from spatial_grounding_ros.models.checkpoints import load_checkpoint, PACKAGED_DIR
 from spatial_grounding_ros.studies import bench
 
@@ -295,3 +297,133 @@ def test_robustness_table_is_the_json():
 
     study = json.loads((RESULTS / 'robustness.json').read_text())
     assert (RESULTS / 'robustness.md').read_text() == robustness_markdown(study)
+
+
+# --- the README's prose ---------------------------------------------------------------------
+# The summary under the README's "## Results" states figures in sentences. Each check finds
+# its sentence by its fixed words, reads the figures out of it and compares them with the
+# results file at the precision the sentence writes them: a change that updates the results
+# and the sentence together passes, a sentence left stale fails.
+
+DEFAULT = 'pw_t-rnet-attn'
+
+
+def said(text: str, sentence: str) -> list[str]:
+    """
+    Return the figures of `sentence` in `text`, where `sentence` marks each with `{}`.
+
+    Line breaks and runs of spaces count as one space; a figure is a number, its % sign
+    (if any) part of the sentence.
+    """
+    flat = ' '.join(text.split())
+    pattern = r'(-?\d+(?:\.\d+)?)'.join(re.escape(part) for part in sentence.split('{}'))
+    match = re.search(pattern, flat)
+    assert match, f'the README no longer says: {sentence!r} (update this check with it)'
+    return list(match.groups())
+
+
+def same_percent(text: str, share: float) -> bool:
+    """`text` (the number before a % sign) is `share` as a percentage at its precision."""
+    return f'{share:.{len(text.partition(".")[2])}%}' == text + '%'
+
+
+def readme_results() -> str:
+    return readme_section('Results')
+
+
+def check_prose(text: str) -> list[str]:
+    """Return what the Results summary in `text` says that the results files do not."""
+    wrong = []
+
+    def compare(what, figures, values, same):
+        for figure, value in zip(figures, values, strict=True):
+            if not same(figure, value):
+                wrong.append(f'{what}: the README says {figure}, the results {value!r}')
+
+    # the reference suite, one map at a time (results/suite.json, make reproduce-suite)
+    suite_run = json.loads((RESULTS / 'suite.json').read_text())['runs'][DEFAULT]
+    figures = said(
+        text,
+        'the exact-goal rate (HIT) on the reference suite is {}% on 10x10 maps, {}% on 32x32 '
+        'and {}% on 64x64',
+    )
+    sizes = ('10', '32', '64')
+    hits = [suite_run['sizes'][s]['hit'] for s in sizes]
+    compare('suite HIT at 10/32/64', figures, hits, same_percent)
+    # the same suite in the office table it never saw (results/landmarks.json, names, plain)
+    [office] = [
+        r
+        for r in json.loads((RESULTS / 'landmarks.json').read_text())['runs'].values()
+        if (r['checkpoint'], r['naming'], r['wording']) == (DEFAULT, 'name', 'plain')
+        and not r.get('footprints')
+    ]
+    figures = said(text, 'with the landmarks of an office table it never saw, {}%, {}% and {}%')
+    hits = [office['sizes'][s]['hit'] for s in sizes]
+    compare('office suite HIT at 10/32/64', figures, hits, same_percent)
+    # the model on the human test splits: the noise-free rows (k = 0) of results/robustness.json
+    clean = {
+        r['task']: r
+        for r in json.loads((RESULTS / 'robustness.json').read_text())['results']
+        if r['checkpoint'] == f'{DEFAULT}.pt' and r['k'] == 0
+    }
+    splits = ('pw-local', 'pw-global')
+    figures = said(
+        text,
+        "On the human PuddleWorld test splits the model's MD is {} (local) and {} (global), "
+        "against the paper's per-task {} and {}, and its HIT {} and {}",
+    )
+    compare('human splits MD', figures[0:2], [clean[s]['md'] for s in splits], same_number)
+    paper = [TASKS[s].paper['t-rnet-attn'][2] for s in splits]
+    compare("the paper's per-task MD", figures[2:4], paper, same_number)
+    compare('human splits HIT', figures[4:6], [clean[s]['hit'] for s in splits], same_number)
+    # through the Grounder: results/honesty.json
+    honesty = json.loads((RESULTS / 'honesty.json').read_text())
+    human = [honesty['human'][s] for s in splits]
+    figures = said(
+        text,
+        'its best cell has MD {} and {} and HIT {} and {}, it declines {}% and {}% of them, the '
+        'answers it gives land on the cell meant {}% and {}% of the time, and its confidence is '
+        'calibrated to an expected error of {}',
+    )
+    compare('Grounder MD', figures[0:2], [h['md_best'] for h in human], same_number)
+    compare('Grounder HIT', figures[2:4], [h['hit_best'] for h in human], same_number)
+    compare('declined', figures[4:6], [h['declined'] for h in human], same_percent)
+    compare('answers exact', figures[6:8], [h['hit_answered'] for h in human], same_percent)
+    compare('calibration error', figures[8:9], [honesty['ece']['both']], same_number)
+    return wrong
+
+
+def test_value_maps_page_default_per_split_is_the_clean_robustness_rows():
+    """docs/value-maps.md's table of the default on each human split: the k = 0 rows."""
+    clean = {
+        r['task']: r
+        for r in json.loads((RESULTS / 'robustness.json').read_text())['results']
+        if r['checkpoint'] == f'{DEFAULT}.pt' and r['k'] == 0
+    }
+    [table] = [
+        t
+        for t in tables((REPO / 'docs' / 'value-maps.md').read_text())
+        if t[0] == ['split', 'MSE', 'PQ', 'MD', 'HIT']
+    ]
+    rows = rows_by_header(table)
+    assert [r['split'] for r in rows] == ['PW local', 'PW global']
+    for row, task in zip(rows, ('pw-local', 'pw-global')):
+        for h in ('MSE', 'PQ', 'MD', 'HIT'):
+            assert same_number(row[h], clean[task][h.lower()]), (task, h, row[h])
+
+
+def test_readme_summary_figures_are_the_results_files():
+    """The figures of the README's Results summary are those of results/*.json."""
+    assert check_prose(readme_results()) == []
+
+
+def test_a_stale_readme_summary_fails():
+    """The check reads the figures: one changed figure in the sentence is one complaint."""
+    text = readme_results()
+    figure = said(text, 'the exact-goal rate (HIT) on the reference suite is {}% on 10x10')[0]
+    stale = text.replace(f'reference suite is\n{figure}%', 'reference suite is\n12.3%').replace(
+        f'reference suite is {figure}%', 'reference suite is 12.3%'
+    )
+    assert stale != text
+    [complaint] = check_prose(stale)
+    assert 'suite HIT' in complaint and '12.3' in complaint
