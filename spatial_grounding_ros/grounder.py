@@ -31,7 +31,7 @@ from .core.footprints import reduce_footprints, side_of
 from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
 from .core.units import offsets
-from .core.wording import canonical, drop_unknown, wording_words
+from .core.wording import canonical, cell_for_fixed_target, drop_unknown, wording_words
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 
@@ -296,11 +296,14 @@ class Grounder:
 
         Other wordings of a relation, a unit or a verb become the model's, filler goes, and
         so does every word the model never saw, so that none can move the goal. The model's
-        own landmark names are never reworded.
+        own landmark names are never reworded, but a target whose row and column two
+        landmarks fix is said as "cell" (wording.cell_for_fixed_target).
         """
         words = tokenize(text)
         names = [i for i, w in enumerate(words) if w in self.model_entities.names]
-        return ' '.join(drop_unknown(canonical(words, names), self.vocab.index))
+        words = drop_unknown(canonical(words, names), self.vocab.index)
+        names = [i for i, w in enumerate(words) if w in self.model_entities.names]
+        return ' '.join(cell_for_fixed_target(words, names))
 
     def judge(self, values: np.ndarray):
         """Return the best cell, its calibrated probability, and the next best with theirs."""

@@ -155,3 +155,21 @@ def test_a_table_without_obstacles_still_renames_the_worlds():
     grid, text, _ = sample(np.random.default_rng(0), 'two-step', 10)
     out, said = rename(grid, text, table, np.random.default_rng(1))
     assert out.max() < len(table) and (out[grid == 1] == 0).all() and said != text
+
+
+def test_a_distance_reference_takes_roles_even_for_the_models_own_names():
+    grid = np.zeros((6, 6), dtype=np.int64)
+    grid[1, 1] = grid[4, 4] = PUDDLEWORLD.index('horse')
+    grid[2, 3] = PUDDLEWORLD.index('heart')
+    t = translation(PUDDLEWORLD)(grid, 'reach horse closest to heart')
+    assert t.instruction == 'reach rock closest to star'  # the first roles of each pool
+    t = translation(PUDDLEWORLD)(grid, 'reach the westernmost horse')
+    assert t.instruction == 'reach the westernmost horse'  # by name: its identity kept
+
+
+def test_names_of_landmarks_not_on_the_map_are_left_out_of_what_the_model_reads():
+    grid = np.zeros((5, 5), dtype=np.int64)
+    grid[2, 2] = PUDDLEWORLD.index('star')
+    t = translation(PUDDLEWORLD)(grid, 'reach cell heart two below the star tree')
+    assert t.instruction == 'reach cell two below the star'
+    assert [m.kind for m in t.mentions] == [5, 2, 9]  # still mentioned: the checks decline

@@ -9,7 +9,7 @@
 import numpy as np
 import pytest
 from spatial_grounding_ros.core.text import tokenize
-from spatial_grounding_ros.core.wording import canonical, drop_unknown
+from spatial_grounding_ros.core.wording import canonical, cell_for_fixed_target, drop_unknown
 from spatial_grounding_ros.data.paraphrase import paraphrase
 from spatial_grounding_ros.grounder import Grounder
 
@@ -68,3 +68,22 @@ def test_unknown_and_filler_words_do_not_move_the_goal(grounder):
         g = grounder.ground(grid, noisy)
         assert (g.goal, g.reason) == (plain.goal, None), g.model_instruction
     assert plain.goal == (5, 4)
+
+
+@pytest.mark.parametrize(
+    'text, said',
+    [
+        ('reach rock one below star and two to the left of circle',
+         'reach cell one below star and two to the left of circle'),
+        ('reach the tree two above heart and one to the right of spade',
+         'reach the cell two above heart and one to the right of spade'),
+        ('reach rock closest to star', None),  # the rock is what picks the cell
+        ('reach rock between star and circle', None),  # no offsets
+        ('reach cell one below star and two to the left of circle', None),
+    ],
+)  # fmt: skip
+def test_a_target_that_two_offsets_fix_is_said_as_a_cell(text, said):
+    words = tokenize(text)
+    names = [i for i, w in enumerate(words) if w in {'rock', 'tree', 'star', 'circle', 'heart',
+                                                     'spade'}]
+    assert ' '.join(cell_for_fixed_target(words, names)) == (said or text)

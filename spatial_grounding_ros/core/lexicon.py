@@ -186,6 +186,8 @@ COMMON_WORDS = frozenset(
     direct directly exactly immediately right
     """.split()
 )
+# words of a reference that picks a landmark by its distance to another
+DISTANCE_WORDS = frozenset('closest nearest closer nearer'.split())
 # how a reference names its target and its landmarks, for choosing the kinds they become
 EXTREME_WORDS = frozenset(
     """
@@ -234,7 +236,8 @@ class Translation:
     picks ("the westernmost chair") or that a relation follows ("the chair closest to the
     sofa") becomes one of the model's non-unique kinds (rock, tree, house, horse), the
     others one of its unique kinds (star ... diamond): the roles those kinds played in its
-    training. The instruction's words are kept; only the names are replaced, and the names
+    training. A reference by distance ("the tree closest to the heart") takes roles for
+    the model's own names too (DISTANCE_WORDS). The instruction's words are kept; only the names are replaced, and the names
     of landmarks the map does not hold are left out.
     """
 
@@ -263,12 +266,16 @@ class Translation:
         mentions = self.lexicon.mentions(words)
         unique, nonunique = list(self.unique), list(self.nonunique)
         kinds: dict[int, int] = {}
+        # a distance reference grounds its landmarks by role even where the model knows
+        # their names: its far relation scores some kinds' rows worse than the roles' kinds
+        # on large maps ("closest to the heart" at 32x32: 3 of 18, against 94% for the rest)
+        by_name = not set(words) & DISTANCE_WORDS
         for m in mentions:
             # a landmark the map does not hold cannot be the referent: its name is left out
             # of what the model reads (the grounding declines with referent-missing)
             if m.kind in kinds or m.kind in self.table.obstacles or not (grid == m.kind).any():
                 continue
-            same = self.same_kind.get(m.kind)
+            same = self.same_kind.get(m.kind) if by_name else None
             if same is not None:  # a kind the model knows by name keeps it
                 kinds[m.kind] = same
                 for pool in (unique, nonunique):
