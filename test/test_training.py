@@ -211,3 +211,21 @@ def test_text_noise_trains_and_is_recorded(tmp_path):
         train_data=generate(40, seed=6, mode='local'), progress=False,
     )
     assert load_checkpoint(path).header['train_config']['text_noise'] == 3
+
+
+def test_init_starts_from_a_checkpoints_weights_and_refuses_another_config():
+    import torch
+
+    from spatial_grounding_ros.core.text import Vocabulary
+    from spatial_grounding_ros.models.checkpoints import load_checkpoint
+    from spatial_grounding_ros.models.registry import build_model
+    from spatial_grounding_ros.training.supervised import start_from
+
+    loaded = load_checkpoint('pw_t-rnet-attn')
+    model = build_model('t-rnet-attn', loaded.model.cfg)
+    start_from(model, loaded.model.cfg, loaded.vocab, 'pw_t-rnet-attn')
+    for name, value in loaded.model.state_dict().items():
+        assert torch.equal(model.state_dict()[name], value), name
+    other = Vocabulary(loaded.vocab.words[2:] + ['zebra'])
+    with pytest.raises(ValueError, match='--init'):
+        start_from(model, loaded.model.cfg, other, 'pw_t-rnet-attn')

@@ -37,7 +37,7 @@ from ..data.datasets import (
 )
 from ..data.generator import generate, MODES
 from ..data.noise import MAX_K
-from ..models.checkpoints import save_checkpoint
+from ..models.checkpoints import load_checkpoint, save_checkpoint
 from ..models.config import ModelConfig
 from ..models.protocol import Capabilities
 from ..models.registry import build_model, capabilities
@@ -116,6 +116,11 @@ class TrainConfig:
         "the paper's model, without the task's additions (tasks.py: axial views, far relation, "
         'instruction in the head)',
     )
+    init: str | None = option(
+        None,
+        "start from this checkpoint's weights (a packaged name or a path; its config and "
+        'vocabulary must be the ones this run builds): fine-tuning',
+    )
     seed: int = option(0, 'seed of the weights, the split and the batches', low=0, high=2**32 - 1)
     threads: int = option(2, 'torch threads', low=1)
 
@@ -130,7 +135,7 @@ class TrainConfig:
             **{
                 f.name: getattr(settings, f.name)
                 for f in fields(self)
-                if getattr(self, f.name) is None
+                if getattr(self, f.name) is None and hasattr(settings, f.name)
             },
         )
 
@@ -255,6 +260,17 @@ def model_config(
     )
 
 
+def start_from(model, cfg: ModelConfig, vocab: Vocabulary, checkpoint: str) -> None:
+    """Load a checkpoint's weights into `model`, whose config and vocabulary must be its."""
+    loaded = load_checkpoint(checkpoint)
+    if loaded.vocab.words != vocab.words or loaded.model.cfg != cfg:
+        raise ValueError(
+            f'--init {checkpoint}: its config or vocabulary differs from this run\'s; '
+            'fine-tune with the task and options it was trained with'
+        )
+    model.load_state_dict(loaded.model.state_dict())
+
+
 def best_epoch(
     epochs: Epochs,
     bar,
@@ -326,6 +342,8 @@ def train_supervised(
     vocab = Vocabulary.build(list(data.instructions) + [t for p in parts for t in p.instructions])
     cfg = model_config(settings, supports, tc, data, vocab, model_options)
     model = build_model(model_name, cfg)
+    if tc.init:
+        start_from(model, cfg, vocab, tc.init)
     processes = distributed.start()
     epochs = Epochs(model, parts, vocab, tc, processes)
     start = time.perf_counter()
