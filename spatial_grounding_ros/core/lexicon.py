@@ -237,8 +237,8 @@ class Translation:
     sofa") becomes one of the model's non-unique kinds (rock, tree, house, horse), the
     others one of its unique kinds (star ... diamond): the roles those kinds played in its
     training. A reference by distance ("the tree closest to the heart") takes roles for
-    the model's own names too (DISTANCE_WORDS). The instruction's words are kept; only the names are replaced, and the names
-    of landmarks the map does not hold are left out.
+    the model's own names too (DISTANCE_WORDS). The instruction's words are kept; only the
+    names are replaced, and the names of landmarks the map does not hold are left out.
     """
 
     def __init__(self, table: EntityTable, model: EntityTable, unique, nonunique):

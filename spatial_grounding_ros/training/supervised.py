@@ -265,7 +265,7 @@ def start_from(model, cfg: ModelConfig, vocab: Vocabulary, checkpoint: str) -> N
     loaded = load_checkpoint(checkpoint)
     if loaded.vocab.words != vocab.words or loaded.model.cfg != cfg:
         raise ValueError(
-            f'--init {checkpoint}: its config or vocabulary differs from this run\'s; '
+            f'--init {checkpoint}: its config or vocabulary differs from this run; '
             'fine-tune with the task and options it was trained with'
         )
     model.load_state_dict(loaded.model.state_dict())
