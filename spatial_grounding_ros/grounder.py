@@ -31,7 +31,7 @@ from .core.footprints import reduce_footprints, side_of
 from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
 from .core.units import offsets
-from .core.wording import canonical, cell_for_fixed_target, drop_unknown, wording_words
+from .core.wording import canonical, cell_for_fixed_target, drop_unknown, tidy, wording_words
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 
@@ -297,11 +297,12 @@ class Grounder:
         Other wordings of a relation, a unit or a verb become the model's, filler goes, and
         so does every word the model never saw, so that none can move the goal. The model's
         own landmark names are never reworded, but a target whose row and column two
-        landmarks fix is said as "cell" (wording.cell_for_fixed_target).
+        landmarks fix is said as "cell" (wording.cell_for_fixed_target), and a verb past the
+        opening or a repeated article is left out (wording.tidy).
         """
         words = tokenize(text)
         names = [i for i, w in enumerate(words) if w in self.model_entities.names]
-        words = drop_unknown(canonical(words, names), self.vocab.index)
+        words = tidy(drop_unknown(canonical(words, names), self.vocab.index))
         names = [i for i, w in enumerate(words) if w in self.model_entities.names]
         return ' '.join(cell_for_fixed_target(words, names))
 

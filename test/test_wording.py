@@ -9,7 +9,12 @@
 import numpy as np
 import pytest
 from spatial_grounding_ros.core.text import tokenize
-from spatial_grounding_ros.core.wording import canonical, cell_for_fixed_target, drop_unknown
+from spatial_grounding_ros.core.wording import (
+    canonical,
+    cell_for_fixed_target,
+    drop_unknown,
+    tidy,
+)
 from spatial_grounding_ros.data.paraphrase import paraphrase
 from spatial_grounding_ros.grounder import Grounder
 
@@ -87,3 +92,26 @@ def test_a_target_that_two_offsets_fix_is_said_as_a_cell(text, said):
     names = [i for i, w in enumerate(words) if w in {'rock', 'tree', 'star', 'circle', 'heart',
                                                      'spade'}]
     assert ' '.join(cell_for_fixed_target(words, names)) == (said or text)
+
+
+@pytest.mark.parametrize(
+    'text, said',
+    [
+        ('reach the go a the northernmost locate rock', 'reach the northernmost rock'),
+        ('go to the rock', 'go to the rock'),  # the opening verb stays
+        ('reach cell go two below star', 'reach cell two below star'),
+        ('move the a an star', 'move an star'),  # a run of articles says one
+    ],
+)
+def test_tidy_leaves_out_verbs_past_the_opening_and_repeated_articles(text, said):
+    assert ' '.join(tidy(text.split())) == said
+
+
+def test_a_cell_word_is_the_cell_only_where_a_relation_follows():
+    assert canonical(tokenize('go to the square two below the star'))[:3] == [
+        'reach', 'the', 'cell'
+    ]
+    # inserted before an extreme it says no cell: left for the vocabulary to keep or drop
+    assert canonical(tokenize('reach the tile westernmost rock')) == [
+        'reach', 'the', 'tile', 'westernmost', 'rock'
+    ]

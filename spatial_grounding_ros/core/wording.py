@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from .checks import offset_before
+from .checks import DIRECTIONS, offset_before
 from .text import tokenize
 
 # canonical words -> the other wordings of them (each a phrase of one or more words)
@@ -65,6 +65,11 @@ UNITS = frozenset(
 )
 COUNTS = frozenset('one two three four'.split())
 ARTICLES = frozenset('the a an'.split())
+# ... and the words that go on to say which cell (a count, a side, a relation), or none
+CELL_AFTER = COUNTS | frozenset(DIRECTIONS) | frozenset(
+    '1 2 3 4 to on at in with of by next near nearest closest between directly just right '
+    'left that which where'.split()
+)
 # the words a cell's other names follow when they name the cell of the request
 CELL_BEFORE = frozenset('reach the a that this'.split())
 
@@ -105,7 +110,11 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
             n = len(wording)
             if canon == ('reach',) and out:
                 continue  # a verb opens a request: mid-sentence, "head" or "find" is no verb
-            if canon == ('cell',) and not (out and out[-1] in CELL_BEFORE):
+            if canon == ('cell',) and not (
+                out
+                and out[-1] in CELL_BEFORE
+                and (i + 1 == len(words) or words[i + 1] in CELL_AFTER)
+            ):
                 continue  # "the spot two below", not a "spot" dropped anywhere
             if tuple(words[i:i + n]) == wording and not keep & set(range(i, i + n)):
                 out += canon
@@ -126,6 +135,28 @@ def drop_unknown(words: list[str], known) -> list[str]:
     """Return the words the model knows (an instruction of none keeps its words)."""
     kept = [w for w in words if w in known]
     return kept or words
+
+
+# the verbs a request opens with, in the model's words and the human annotators'
+OPENING_VERBS = frozenset('reach go locate move find get navigate'.split())
+
+
+def tidy(words: list[str]) -> list[str]:
+    """
+    Return the words with a verb past the request's opening and repeated articles left out.
+
+    "reach the go a the northernmost locate rock": a verb opens a request, so one later is a
+    slip or noise ("go to the rock" keeps its "go"), and a run of articles says one.
+    """
+    out: list[str] = []
+    for i, w in enumerate(words):
+        if w in OPENING_VERBS and any(v not in OPENING_VERBS for v in words[:i]):
+            continue
+        if w in ARTICLES and out and out[-1] in ARTICLES:
+            out[-1] = w
+            continue
+        out.append(w)
+    return out
 
 
 def cell_for_fixed_target(words: list[str], names: Iterable[int]) -> list[str]:
