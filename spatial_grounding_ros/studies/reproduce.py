@@ -144,18 +144,29 @@ def reproduce_suite(out: str | Path, sizes=(10, 32, 64), n: int = 100, seed: int
     }
     (out / 'suite.json').write_text(json.dumps({'meta': meta, 'runs': results}, indent=1) + '\n')
     (out / 'suite.md').write_text(suite.markdown_table(results))
-    # the default on a table it never saw, its landmarks named by name, alias and typo
+    # the default on a table it never saw, its landmarks named by name, alias and typo, worded
+    # as people word them, and drawn as a robot's map draws them (footprints, unexplored
+    # regions) with distances in metres
+    runs = [
+        *((naming, 'plain', False) for naming in NAMINGS),
+        ('alias', 'paraphrase', False),
+        ('name', 'plain', True),
+        ('alias', 'metric', True),
+    ]
     own = {
-        f'{LANDMARKS_TABLE.stem} ({naming}, {wording})': suite.run_suite(
-            SUITE_CHECKPOINTS[0],
-            sizes,
-            n,
-            seed,
-            entities=LANDMARKS_TABLE,
-            naming=naming,
-            wording=wording,
+        f'{LANDMARKS_TABLE.stem} ({naming}, {wording}{", footprints" if drawn else ""})': (
+            suite.run_suite(
+                SUITE_CHECKPOINTS[0],
+                sizes,
+                n,
+                seed,
+                entities=LANDMARKS_TABLE,
+                naming=naming,
+                wording=wording,
+                footprints=drawn,
+            )
         )
-        for naming, wording in [*((n, 'plain') for n in NAMINGS), ('alias', 'paraphrase')]
+        for naming, wording, drawn in runs
     }
     meta = {**meta, 'checkpoint': SUITE_CHECKPOINTS[0], 'entities': str(LANDMARKS_TABLE.name)}
     (out / 'landmarks.json').write_text(json.dumps({'meta': meta, 'runs': own}, indent=1) + '\n')
