@@ -266,3 +266,47 @@ def test_another_entity_table_configures_with_the_default_checkpoint(ros_context
         )
     )
     assert node.grounder is not None and node.grounder.entities.domain != 'puddleworld'
+
+
+@pytest.mark.parametrize(
+    'instruction, cell',
+    [
+        ('reach cell two below the sofa', (7, 4)),  # the 2x3 sofa: under its bottom middle
+        ('please go two squares south of the couch', (7, 4)),  # an alias, a paraphrase
+        ('zorp reach cell two below the sfoa blorf', (7, 4)),  # a typo, unknown words
+        ('stop one metre north of the refrigerator', (5, 8)),  # metres at 0.5 m cells
+        ('reach the southernmost chair', (8, 1)),
+    ],
+)
+def test_the_node_grounds_a_table_of_its_own(ros_context, instruction, cell):
+    """Over DDS, with entity_table: entities_office.yaml and the default checkpoint."""
+    graph = ros_context
+    namespace = unique_namespace('office_words')
+    graph.add(
+        GrounderNode(
+            context=graph.context,
+            namespace=namespace,
+            parameter_overrides=[
+                Parameter('entity_table', value='entities_office.yaml'),
+                Parameter('torch_threads', value=0),
+            ],
+        )
+    )
+    client = GroundingClient(namespace, context=graph.context)
+    try:
+        assert client.wait_for_server(15), 'no ground_instruction service'
+        grid = np.zeros((10, 10), dtype=np.int64)
+        grid[0, :] = 1  # wall (the office table's indices)
+        grid[4:6, 3:6] = 7  # a sofa over 2x3 cells: rows 4-5, columns 3-5
+        grid[7, 8] = 9  # a fridge
+        grid[8, 1] = grid[2, 2] = 3  # two chairs
+        info = convert.map_info(grid.shape, resolution=0.5, origin=(1.0, -2.0))
+        answer = client.ground(
+            instruction,
+            entity_map=convert.grid_to_occupancy_grid(grid, Header(frame_id='map'), info),
+        )
+        assert answer.success, answer
+        position = answer.goal.pose.position
+        assert (position.x, position.y) == pytest.approx(convert.cell_centre(cell, info)[:2])
+    finally:
+        client.close()
