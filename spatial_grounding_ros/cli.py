@@ -251,7 +251,16 @@ def _extensions():
     """
     from .data import bags
     from .shapeworld import commands as shapeworld
-    from .studies import bench, calibration, explain, ground, honesty, robustness, suite
+    from .studies import (
+        bench,
+        calibration,
+        explain,
+        ground,
+        honesty,
+        kinds_ablation,
+        robustness,
+        suite,
+    )
 
     found = [
         functools.partial(bench.register_cli, ros_latency=ros_round_trip_latency),
@@ -259,6 +268,7 @@ def _extensions():
         suite.register_cli,
         ground.register_cli,
         honesty.register_cli,
+        kinds_ablation.register_cli,
         calibration.register_cli,
         shapeworld.register_cli,
         robustness.register_cli,

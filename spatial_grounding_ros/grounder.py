@@ -122,6 +122,7 @@ class Grounder:
         min_confidence: float = 0.0,
         cached_instructions: int = 64,
         cell_size: float | None = None,
+        kinds_by: str = 'name',
     ):
         """
         Wrap a loaded checkpoint, for maps in `entities` (default: the checkpoint's table).
@@ -130,6 +131,7 @@ class Grounder:
         only their own. `min_confidence` (0..1): a grounding less sure than this declines.
         `cell_size`: metres per cell, for distances in metres (core/units.py); a table's
         landmarks may cover several cells (EntityTable.has_footprints, core/footprints.py).
+        `kinds_by`: how the model's own landmark names take its kinds (lexicon.KINDS_BY).
         The text codes of the last `cached_instructions` instructions are kept (t-RNetAttn: the
         relation table over all kinds), since a node grounds the same instruction on new maps.
         """
@@ -143,7 +145,11 @@ class Grounder:
         self.translation = None
         if loaded.entities.domain == 'puddleworld':
             self.translation = Translation(
-                self.entities, loaded.entities, PUDDLEWORLD_UNIQUE, PUDDLEWORLD_NONUNIQUE
+                self.entities,
+                loaded.entities,
+                PUDDLEWORLD_UNIQUE,
+                PUDDLEWORLD_NONUNIQUE,
+                kinds_by,
             )
         elif self.entities.names != loaded.entities.names:
             raise ValueError(

@@ -173,3 +173,23 @@ def test_names_of_landmarks_not_on_the_map_are_left_out_of_what_the_model_reads(
     t = translation(PUDDLEWORLD)(grid, 'reach cell heart two below the star tree')
     assert t.instruction == 'reach cell two below the star'
     assert [m.kind for m in t.mentions] == [5, 2, 9]  # still mentioned: the checks decline
+
+
+def test_kinds_by_name_always_or_role_always_for_the_ablation():
+    grid = np.zeros((6, 6), dtype=np.int64)
+    grid[1, 1] = grid[4, 4] = PUDDLEWORLD.index('horse')
+    grid[2, 3] = PUDDLEWORLD.index('heart')
+    by = {
+        kinds_by: Translation(
+            PUDDLEWORLD, PUDDLEWORLD, PUDDLEWORLD_UNIQUE, PUDDLEWORLD_NONUNIQUE, kinds_by
+        )
+        for kinds_by in ('name', 'name-always', 'role')
+    }
+    assert by['name-always'](grid, 'reach horse closest to heart').instruction == (
+        'reach horse closest to heart'
+    )
+    assert by['role'](grid, 'reach the westernmost horse').instruction == (
+        'reach the westernmost rock'
+    )
+    with pytest.raises(ValueError, match='kinds_by'):
+        Translation(PUDDLEWORLD, PUDDLEWORLD, PUDDLEWORLD_UNIQUE, PUDDLEWORLD_NONUNIQUE, 'x')

@@ -143,6 +143,7 @@ def readme_section(heading: str) -> str:
         ('Results: your own landmarks', 'landmarks.md'),
         ('Results: honest answers', 'honesty.md'),
         ('Results: the node under noise words', 'robustness_grounder.md'),
+        ('Results: landmark kinds by name or by role', 'kinds_ablation.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):

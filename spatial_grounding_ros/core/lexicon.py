@@ -186,6 +186,9 @@ COMMON_WORDS = frozenset(
     direct directly exactly immediately right
     """.split()
 )
+# how a Translation gives the model's own names their kinds: by name but for a reference by
+# distance (the default), by name always, or by role always (the ablation's other two)
+KINDS_BY = ('name', 'name-always', 'role')
 # words of a reference that picks a landmark by its distance to another
 DISTANCE_WORDS = frozenset('closest nearest closer nearer'.split())
 # how a reference names its target and its landmarks, for choosing the kinds they become
@@ -237,11 +240,17 @@ class Translation:
     sofa") becomes one of the model's non-unique kinds (rock, tree, house, horse), the
     others one of its unique kinds (star ... diamond): the roles those kinds played in its
     training. A reference by distance ("the tree closest to the heart") takes roles for
-    the model's own names too (DISTANCE_WORDS). The instruction's words are kept; only the
+    the model's own names too (DISTANCE_WORDS; `kinds_by` 'name-always' or 'role' for the
+    ablation). The instruction's words are kept; only the
     names are replaced, and the names of landmarks the map does not hold are left out.
     """
 
-    def __init__(self, table: EntityTable, model: EntityTable, unique, nonunique):
+    def __init__(
+        self, table: EntityTable, model: EntityTable, unique, nonunique, kinds_by: str = 'name'
+    ):
+        if kinds_by not in KINDS_BY:
+            raise ValueError(f'kinds_by must be one of {", ".join(KINDS_BY)}, got {kinds_by!r}')
+        self.kinds_by = kinds_by
         self.lexicon = Lexicon(table, COMMON_WORDS)
         self.table, self.model = table, model
         self.unique = [model.index(n) for n in unique]
@@ -269,7 +278,9 @@ class Translation:
         # a distance reference grounds its landmarks by role even where the model knows
         # their names: its far relation scores some kinds' rows worse than the roles' kinds
         # on large maps ("closest to the heart" at 32x32: 3 of 18, against 94% for the rest)
-        by_name = not set(words) & DISTANCE_WORDS
+        by_name = self.kinds_by == 'name-always' or (
+            self.kinds_by == 'name' and not set(words) & DISTANCE_WORDS
+        )
         for m in mentions:
             # a landmark the map does not hold cannot be the referent: its name is left out
             # of what the model reads (the grounding declines with referent-missing)

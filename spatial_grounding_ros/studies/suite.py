@@ -142,6 +142,7 @@ def run_suite(
     naming: str = 'name',
     wording: str = 'plain',
     footprints: bool = False,
+    kinds_by: str = 'name',
 ) -> dict:
     """
     Hit and MD per family and size, per group and size, per size, and overall.
@@ -157,7 +158,7 @@ def run_suite(
         raise ValueError(f'--n must be at least 1, got {n}')
     loaded = load_checkpoint(checkpoint, expect_entities=PUDDLEWORLD)
     table = resolve_table(entities) or PUDDLEWORLD
-    grounder = Grounder(loaded, table)
+    grounder = Grounder(loaded, table, kinds_by=kinds_by)
     distances = {f: {} for f in families}
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
