@@ -429,7 +429,6 @@ class GrounderNode(LifecycleNode):
 
     def run_grounder(self, grid: np.ndarray, text: str, map_msg: OccupancyGrid) -> Grounding:
         self.grounder.min_confidence = self.param('min_confidence')  # settable at run time
-        # the map's cell size turns "two metres south of the sink" into cells
         return self.grounder.ground(grid, text, cell_size=map_msg.info.resolution)
 
     def output_header(self, map_msg: OccupancyGrid) -> Header:
