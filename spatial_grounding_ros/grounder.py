@@ -270,7 +270,7 @@ class Grounder:
             None if reason else best,
             words,
             None if attention is None else attention[0].tolist(),
-            [w for i, w in enumerate(words) if w not in self.vocab.index and i not in named],
+            [w for i, w in enumerate(words) if w not in self.known and i not in named],
             best=best,
             confidence=confidence,
             reason=reason,

@@ -115,3 +115,10 @@ def test_a_cell_word_is_the_cell_only_where_a_relation_follows():
     assert canonical(tokenize('reach the tile westernmost rock')) == [
         'reach', 'the', 'tile', 'westernmost', 'rock'
     ]
+
+
+def test_words_the_wording_layer_reads_are_not_reported_unknown(grounder):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[3, 4] = 2  # a star
+    g = grounder.ground(grid, 'please go two squares south of the star zorp')
+    assert g.unknown_words == ['zorp']
