@@ -24,7 +24,7 @@ import time
 import numpy as np
 import torch
 
-from .results import merge_rows
+from .results import code_version, merge_rows
 from ..core.tasks import RL_TASKS, TASKS
 from ..data.datasets import load_task
 from ..data.renaming import NAMINGS
@@ -87,6 +87,8 @@ def value_map_row(task: str, model_name: str, path: Path, summary: dict, test) -
         **summary,
         'test': evaluate(loaded.model, loaded.vocab, test),
         'checkpoint': path.name,
+        'commit': code_version(),
+        'command': 'spatial-grounding reproduce --tasks {} --models {}'.format(task, model_name),
     }
     g1 = torch.from_numpy(test.grids[:1])
     tokens = torch.from_numpy(loaded.vocab.encode_batch(test.instructions[:512]))

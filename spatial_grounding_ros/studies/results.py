@@ -24,6 +24,38 @@ from typing import Callable
 from ..core.tasks import TASKS
 
 
+PACKAGE = 'spatial_grounding_ros'
+
+
+def code_version() -> str:
+    """
+    Return the commit the package runs from ('<hash>-dirty' with changes not committed).
+
+    'unknown' outside a git checkout (an installed wheel): a results row says which code made it.
+    """
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]  # the package's checkout
+    try:
+        commit = subprocess.run(
+            ['git', 'rev-parse', '--short', 'HEAD'],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ['git', 'status', '--porcelain', '--untracked-files=no', '--', PACKAGE],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return 'unknown'
+    return f'{commit}-dirty' if dirty else commit
+
+
 @contextlib.contextmanager
 def locked(path: Path):
     """Hold an exclusive lock on `path`'s `.lock` file (other processes wait for it)."""
