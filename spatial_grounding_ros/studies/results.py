@@ -25,6 +25,7 @@ from ..core.tasks import TASKS
 
 
 PACKAGE = 'spatial_grounding_ros'
+EXCLUDED = f':(exclude){PACKAGE}/checkpoints'
 
 
 def code_version() -> str:
@@ -45,7 +46,8 @@ def code_version() -> str:
             check=True,
         ).stdout.strip()
         dirty = subprocess.run(
-            ['git', 'status', '--porcelain', '--untracked-files=no', '--', PACKAGE],
+            # a run's own checkpoints, copied into the package as it goes, are no change
+            ['git', 'status', '--porcelain', '--untracked-files=no', '--', PACKAGE, EXCLUDED],
             cwd=root,
             capture_output=True,
             text=True,
