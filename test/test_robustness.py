@@ -107,6 +107,21 @@ def test_minimum_verdict_reads_the_rows():
     # each family of checkpoints is judged on its own
     both = minimum_verdict(rows(0.2, 0.5) + rows(1.6, 0.1, family='pw'))
     assert 'per-task checkpoints: holds' in both and 'pw_* checkpoints: does not hold' in both
+    # over noise seeds the rise is the mean MD's: seed 0 alone (+20% against +10%) fails,
+    # seeds 0-3 (t-RNetAttn 1.0 -> mean 1.1, t-CNN 2.0 -> mean 2.4: +10% against +20%) hold
+    seeds = [
+        {'task': task, 'checkpoint': f'{task}_{model}.pt', 'model': model, 'clean_md': clean,
+         'md_by_seed': dict(zip('0123', noisy))}
+        for task in ('pw-local', 'pw-global')
+        for model, clean, noisy in (
+            ('t-rnet-attn', 1.0, (1.2, 1.0, 1.1, 1.1)),
+            ('t-cnn', 2.0, (2.2, 2.6, 2.4, 2.4)),
+        )
+    ]
+    assert 'does not hold' in minimum_verdict(rows(0.2, 0.1))
+    averaged = minimum_verdict(rows(0.2, 0.1), seeds)
+    assert 'per-task checkpoints: holds' in averaged and 'seeds 0, 1, 2, 3' in averaged
+    assert 't-rnet-attn +10%, t-cnn +20%' in averaged
 
 
 def test_markdown_table_has_a_line_per_model_and_noise(setup):

@@ -37,6 +37,10 @@ STUDY_MODELS = ('t-rnet-attn', 't-rnet', 't-cnn')
 # The issue's minimum: at k = 10 unseen objects on PW local and global, t-RNetAttn's MD rises by
 # at most 30% (the paper's figure) and by less than t-CNN's.
 MINIMUM_TASKS, MINIMUM_RISE = ('pw-local', 'pw-global'), 0.30
+# the noise seeds the minimum's rise is averaged over (one seed's 10 unseen objects can fall
+# kindly or not: the default's PW global rise is -1% to +10% over these)
+MINIMUM_SEEDS = (0, 1, 2, 3)
+MINIMUM_MODELS = ('t-rnet-attn', 't-cnn')
 # The PuddleWorld checkpoints trained on both PW tasks, the node's default among them: studied on
 # each PW task beside the per-task ones
 PW_FAMILY = 'pw'
@@ -112,19 +116,48 @@ def study(
     return rows
 
 
-def minimum_verdict(rows: list[dict]) -> str | None:
+def minimum_rows(data_dir, checkpoints_by_task: dict, seeds=MINIMUM_SEEDS) -> list[dict]:
+    """Return the minimum's rows: each checkpoint's clean MD and its MD at k = 10 per seed."""
+    rows = []
+    for task, checkpoints in checkpoints_by_task.items():
+        test = load_task(task, 'test', data_dir)
+        for checkpoint in checkpoints:
+            model = load_checkpoint(checkpoint, expect_entities=test.entities)
+            if model.name not in MINIMUM_MODELS:
+                continue
+            noisy = {}
+            for seed in tqdm(seeds, desc=f'minimum {checkpoint}'):
+                data = add_noise(test, model.vocab, 'obs-noise', MAX_K, seed)
+                noisy[str(seed)] = evaluate(model.model, model.vocab, data)['md']
+            rows.append(
+                {
+                    'task': task,
+                    'checkpoint': checkpoint,
+                    'model': model.name,
+                    'clean_md': evaluate(model.model, model.vocab, test)['md'],
+                    'md_by_seed': noisy,
+                }
+            )
+    return rows
+
+
+def minimum_verdict(rows: list[dict], seed_rows: list[dict] | None = None) -> str | None:
     """
     Say whether the issue's minimum holds, from the rows (None: the rows cannot tell).
 
     At k = 10 unseen objects on PW local and global, t-RNetAttn's MD rises by at most 30%
     and by less than t-CNN's: judged for each family of checkpoints (per task; pw) whose rows
-    have both models on both tasks.
+    have both models on both tasks. With `seed_rows` (minimum_rows) the rise is that of the
+    MD averaged over their noise seeds.
     """
     rise = {
         (r['task'], family(r['checkpoint']), r['model']): r['md_rel']
         for r in rows
         if r['noise'] == 'obs-noise' and r['k'] == MAX_K
     }
+    for r in seed_rows or []:
+        mean = float(np.mean(list(r['md_by_seed'].values())))
+        rise[(r['task'], family(r['checkpoint']), r['model'])] = mean / r['clean_md'] - 1
     verdicts = []
     for label, name in (('per-task checkpoints', None), ('pw_* checkpoints', PW_FAMILY)):
         keys = {task: (task, name or task) for task in MINIMUM_TASKS}
@@ -143,9 +176,11 @@ def minimum_verdict(rows: list[dict]) -> str | None:
         verdicts.append(f'{label}: {verdict} ({"; ".join(parts)}).')
     if not verdicts:
         return None
+    seeds = sorted({int(x) for r in seed_rows or [] for x in r['md_by_seed']})
+    averaged = f', MD averaged over noise seeds {", ".join(map(str, seeds))}' if seeds else ''
     return (
         f'Minimum (k = {MAX_K} unseen objects: t-rnet-attn MD rises by at most '
-        f'{MINIMUM_RISE:.0%} and by less than t-cnn): ' + ' '.join(verdicts)
+        f'{MINIMUM_RISE:.0%} and by less than t-cnn{averaged}): ' + ' '.join(verdicts)
     )
 
 
@@ -153,7 +188,7 @@ def _percent(x: float | None) -> str:
     return '-' if x is None else f'{x:+.0%}'
 
 
-def markdown_table(rows: list[dict], seed: int) -> str:
+def markdown_table(rows: list[dict], seed: int, seed_rows: list[dict] | None = None) -> str:
     """One line per task, checkpoint and noise: clean MD and HIT, then MD's change at each k."""
     ks = sorted({r['k'] for r in rows} - {0})
     lines = [
@@ -180,7 +215,7 @@ def markdown_table(rows: list[dict], seed: int) -> str:
     caption = [
         f'MD at each amount k of noise (its change against the clean test set), seed {seed}.'
     ]
-    verdict = minimum_verdict(rows)
+    verdict = minimum_verdict(rows, seed_rows)
     if verdict:
         caption.append(verdict)
     return '\n'.join(lines) + '\n\n' + '\n\n'.join(caption) + '\n'
@@ -204,17 +239,26 @@ def reproduce_robustness(
     shipped checkpoint for a task is listed under "missing", not silently left out.
     """
     out = Path(out)
-    rows, missing = [], []
+    rows, missing, found_by_task = [], [], {}
     for task in tasks:
         names = study_checkpoints(task, models)
         missing += [n for n in names if not (PACKAGED_DIR / f'{n}.pt').is_file()]
         found = [n for n in names if n not in missing]
         if found:
             rows += study(task, found, ks, seed, data_dir)
+            if task in MINIMUM_TASKS and MAX_K in ks:
+                found_by_task[task] = found
+    seed_rows = minimum_rows(data_dir, found_by_task)
     missing = list(dict.fromkeys(missing))  # pw_* is looked for on each PW task
     if missing:
         print(f'robustness: no shipped checkpoint for {", ".join(missing)}', file=sys.stderr)
-    result = {'seed': seed, 'ks': check_ks(ks), 'missing': missing, 'results': rows}
+    result = {
+        'seed': seed,
+        'ks': check_ks(ks),
+        'missing': missing,
+        'results': rows,
+        'minimum_seeds': seed_rows,
+    }
     out.mkdir(parents=True, exist_ok=True)
     (out / 'robustness.json').write_text(json.dumps(result, indent=1) + '\n')
     (out / 'robustness.md').write_text(robustness_markdown(result))
@@ -224,7 +268,7 @@ def reproduce_robustness(
 
 def robustness_markdown(result: dict) -> str:
     """Return results/robustness.md: the table, and the checkpoints the study lacked."""
-    table = markdown_table(result['results'], result['seed'])
+    table = markdown_table(result['results'], result['seed'], result.get('minimum_seeds'))
     if result['missing']:
         table += f'\nNo shipped checkpoint (not in the study): {", ".join(result["missing"])}.\n'
     return table
