@@ -208,3 +208,16 @@ def test_the_default_grounds_footprint_worlds(grounder, size, floor):
         for w in suite_worlds(family, size, 6, 7, OFFICE, footprints=True):
             hits.append(grounder.ground(w.grid, w.instruction).goal == tuple(w.goal))
     assert np.mean(hits) >= floor
+
+
+def test_the_ground_command_takes_a_cell_size(capsys):
+    import json
+
+    from spatial_grounding_ros.cli import main
+
+    office = Path(__file__).parents[1] / 'docs' / 'examples' / 'office.txt'
+    args = ['ground', '--entities', str(Path(__file__).parents[1] / 'config'
+                                        / 'entities_office.yaml'),
+            '--map', str(office), '--instruction', 'go one metre south of the couch', '--json']
+    assert main([*args, '--cell-size', '0.5']) == 0
+    assert json.loads(capsys.readouterr().out)['goal'] == [9, 1]  # the sofa: row 7, columns 1-2

@@ -74,7 +74,7 @@ def in_cells(instruction: str, cell_size: float | None) -> str:
         if cell_size is None:
             raise ValueError(
                 f'{match.group(0)!r} is a distance in metres; grounding it needs the map cell '
-                'size (Grounder(cell_size=...) or ground(..., cell_size=...))'
+                'size in metres (cell_size; the ground command: --cell-size)'
             )
         unit = match.group('unit').lower().rstrip('s')
         metres = _amount(match.group('n')) * _METRES[unit]

@@ -101,7 +101,9 @@ def draw(grid: np.ndarray, grounder: Grounder, g: Grounding, path: str | Path) -
 
 
 def cmd_ground(args) -> int:
-    grounder = Grounder.from_checkpoint(args.checkpoint, args.entities, args.min_confidence)
+    grounder = Grounder.from_checkpoint(
+        args.checkpoint, args.entities, args.min_confidence, cell_size=args.cell_size
+    )
     grid = read_grid(args.map)
     g = grounder.ground(grid, args.instruction)
     result = summary(g)
@@ -120,6 +122,12 @@ def register_cli(sub) -> None:
     p.add_argument('--map', required=True, help='a text file of entity indices, or a .npy')
     p.add_argument('--instruction', required=True)
     p.add_argument('--min-confidence', type=ranged(float, low=0.0, high=1.0), default=0.0)
+    p.add_argument(
+        '--cell-size',
+        type=ranged(float, low=1e-6),
+        default=None,
+        help='metres per cell, for distances in metres ("two metres south of the sofa")',
+    )
     p.add_argument('--out', default=None, help='draw the grounding into this PNG')
     p.add_argument('--json', action='store_true', help='print exactly one line of JSON')
     p.set_defaults(func=cmd_ground)
