@@ -88,6 +88,8 @@ def test_reduce_keeps_the_anchor_and_makes_the_rest_an_obstacle():
          'stop four to the left of the fridge', (0, -1)),
         ('half a metre north of the lamp', 0.25, 'two north of the lamp',
          'two north of the lamp', (0, 0)),
+        ('go 1,5m west of the sink', 0.5, 'go three west of the sink',
+         'go three west of the sink', (0, 0)),  # a decimal comma, no space
         ('reach the cell 7 cells above the rock', None, 'reach the cell 7 above the rock',
          'reach the cell four above the rock', (-3, 0)),
         ('reach northernmost rock', None, 'reach northernmost rock', 'reach northernmost rock',

@@ -30,7 +30,7 @@ _NUMBER_WORDS = {
         'one two three four five six seven eight nine ten eleven twelve'.split(), 1
     )
 }
-_AMOUNT = r'(?P<n>\d+(?:\.\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + ')'
+_AMOUNT = r'(?P<n>\d+(?:[.,]\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + ')'
 _METRES = {'m': 1.0, 'metre': 1.0, 'meter': 1.0, 'cm': 0.01, 'centimetre': 0.01,
            'centimeter': 0.01}  # fmt: skip
 _METRIC = re.compile(
@@ -60,7 +60,7 @@ def _amount(text: str) -> float:
         return 0.5
     if text in ('a', 'an'):
         return 1.0
-    return float(_NUMBER_WORDS.get(text) or text)
+    return float(_NUMBER_WORDS.get(text) or text.replace(',', '.'))  # 1,5 m is 1.5 m
 
 
 def in_cells(instruction: str, cell_size: float | None) -> str:
