@@ -161,7 +161,8 @@ class Grounder:
         # calibration: confidence is the softmax of the values at this temperature
         self.temperature = float(loaded.header.get('calibration', {}).get('temperature', 1.0))
         self.model.eval()
-        self.text_codes: OrderedDict[str, TextCode] = OrderedDict()  # least recently used first
+        # instruction -> (its words for the model, text code); least recently used first
+        self.text_codes: OrderedDict[str, tuple[str, TextCode]] = OrderedDict()
 
     @classmethod
     def from_checkpoint(
@@ -217,15 +218,21 @@ class Grounder:
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
-    def text_code(self, instruction: str) -> TextCode:
-        """Return the model's text code of an instruction, computed once while it is in use."""
-        code = self.text_codes.pop(instruction, None)
-        if code is None:
-            code = self.model.text_code(torch.as_tensor(self.vocab.encode_batch([instruction])))
+    def text_code(self, instruction: str) -> tuple[str, TextCode]:
+        """
+        Return what the model reads of an instruction (reword) and its text code.
+
+        Both are computed once while the instruction is in use.
+        """
+        coded = self.text_codes.pop(instruction, None)
+        if coded is None:
+            words = self.reword(instruction)
+            tokens = torch.as_tensor(self.vocab.encode_batch([words]))
+            coded = words, self.model.text_code(tokens)
             if len(self.text_codes) >= self.cached_instructions:
                 self.text_codes.popitem(last=False)
-        self.text_codes[instruction] = code
-        return code
+        self.text_codes[instruction] = coded
+        return coded
 
     @torch.no_grad()
     def ground(
@@ -250,10 +257,8 @@ class Grounder:
         else:
             model_text = distances.model_text
             model_grid, mentions = grid, self.lexicon.mentions(tokenize(model_text))
-        model_text = self.reword(model_text)
-        values, aux = self.model.ground(
-            torch.as_tensor(model_grid)[None], self.text_code(model_text), return_aux=True
-        )
+        model_text, code = self.text_code(model_text)
+        values, aux = self.model.ground(torch.as_tensor(model_grid)[None], code, return_aux=True)
         values = shifted(values[0].numpy(), distances.extra)
         best, confidence, alternatives = self.judge(values)
         reason = structural_reason(self.entities, grid, words, mentions, self.known)

@@ -18,6 +18,7 @@ network's "four below the rock".
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import re
 
 from .checks import DIRECTIONS
@@ -85,6 +86,7 @@ def in_cells(instruction: str, cell_size: float | None) -> str:
     return _METRIC.sub(cells, instruction)
 
 
+@functools.lru_cache(maxsize=256)  # a node grounds the same instruction on every new map
 def offsets(instruction: str, cell_size: float | None = None) -> Offsets:
     """
     Return an instruction's distances in cells (in_cells), split at LEARNED_COUNT.
