@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .core.checks import offset_before, structural_reason
+from .core.checks import named_sides, structural_reason
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
-from .core.footprints import reduce_footprints, side_of
+from .core.footprints import reduce_footprints
 from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
 from .core.units import offsets
@@ -292,13 +292,8 @@ class Grounder:
         The side each landmark's offset leaves it on is read from the words before its
         mention (core/footprints.py).
         """
-        words = tokenize(text)
-        sides, previous = {}, 0
-        for m in translated.mentions:
-            offset = offset_before(words, previous, m.start)
-            previous = m.end
-            if m.kind in translated.kinds:
-                sides.setdefault(translated.kinds[m.kind], side_of(offset))
+        sides = named_sides(tokenize(text), list(translated.mentions))
+        sides = {translated.kinds[k]: side for k, side in sides.items() if k in translated.kinds}
         return reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
 
     def reword(self, text: str) -> str:

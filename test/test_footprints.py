@@ -155,10 +155,9 @@ def test_footprints_are_off_for_puddleworlds_one_cell_objects():
 @pytest.mark.parametrize('family', FAMILIES)
 def test_grown_worlds_keep_the_goal_named(family):
     """Each grown landmark's anchor, for its side, is the cell it was: the goal is unchanged."""
-    from spatial_grounding_ros.core.checks import offset_before
-    from spatial_grounding_ros.core.footprints import side_of
-    from spatial_grounding_ros.core.lexicon import COMMON_WORDS, Lexicon
+    from spatial_grounding_ros.core.checks import named_sides
     from spatial_grounding_ros.core.text import tokenize
+    from spatial_grounding_ros.data.footprints import mentions_of
 
     plain = suite_worlds(family, 12, 8, 3, OFFICE)
     grown = suite_worlds(family, 12, 8, 3, OFFICE, footprints=True)
@@ -166,12 +165,9 @@ def test_grown_worlds_keep_the_goal_named(family):
         assert before.goal == after.goal and before.instruction == after.instruction
         assert after.grid[after.goal] == before.grid[before.goal]
         words = tokenize(after.instruction)
-        previous = 0
-        for m in Lexicon(OFFICE, COMMON_WORDS).mentions(words):
-            side = side_of(offset_before(words, previous, m.start))
-            previous = m.end
-            for r, c in np.argwhere(before.grid == m.kind):
-                group = next(g for g in footprints(after.grid, m.kind) if [r, c] in g.tolist())
+        for kind, side in named_sides(words, mentions_of(words, OFFICE)).items():
+            for r, c in np.argwhere(before.grid == kind):
+                group = next(g for g in footprints(after.grid, kind) if [r, c] in g.tolist())
                 assert anchor(group, side) == (r, c)
 
 

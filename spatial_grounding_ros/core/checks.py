@@ -33,6 +33,7 @@ from dataclasses import replace
 import numpy as np
 
 from .entities import EntityTable
+from .footprints import side_of
 from .lexicon import (
     COMMON_WORDS,
     count_objects,
@@ -101,6 +102,28 @@ def offset_before(words: list[str], start: int, end: int) -> tuple[int, int]:
     return dr, dc
 
 
+def mention_offsets(words: list[str], mentions: list[Mention]) -> list[tuple[Mention, tuple]]:
+    """
+    Pair each mention with the offset its words say: those back to the previous mention.
+
+    "one above the star and two to the right of the circle": the star (-1, 0), the circle
+    (0, 2), as a row-and-column reference means them.
+    """
+    pairs, previous = [], 0
+    for m in mentions:
+        pairs.append((m, offset_before(words, previous, m.start)))
+        previous = m.end
+    return pairs
+
+
+def named_sides(words: list[str], mentions: list[Mention]) -> dict[int, tuple[int, int]]:
+    """Return each named kind's side: the signs of its first mention's offset (footprints)."""
+    sides: dict[int, tuple[int, int]] = {}
+    for m, offset in mention_offsets(words, mentions):
+        sides.setdefault(m.kind, side_of(offset))
+    return sides
+
+
 def off_map(grid: np.ndarray, words: list[str], mentions: list[Mention]) -> bool:
     """
     Return whether a named offset from a landmark leaves the map from each of its cells.
@@ -110,10 +133,7 @@ def off_map(grid: np.ndarray, words: list[str], mentions: list[Mention]) -> bool
     one and the column of the other.
     """
     h, w = grid.shape
-    previous = 0
-    for m in mentions:
-        dr, dc = offset_before(words, previous, m.start)
-        previous = m.end
+    for m, (dr, dc) in mention_offsets(words, mentions):
         if (dr, dc) == (0, 0):
             continue
         rows, cols = np.nonzero(grid == m.kind)

@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.checks import offset_before
+from ..core.checks import mention_offsets, named_sides
 from ..core.entities import EntityTable
-from ..core.footprints import footprints, side_of
+from ..core.footprints import footprints
 from ..core.lexicon import COMMON_WORDS, Lexicon
 from ..core.text import tokenize
 
@@ -43,6 +43,11 @@ def unknown_kind(table: EntityTable) -> int:
     return table.obstacles[-1]
 
 
+def mentions_of(words: list[str], table: EntityTable):
+    """Return the landmarks the words name, read as the Grounder reads them."""
+    return Lexicon(table, COMMON_WORDS).mentions(words)
+
+
 def separate(
     grid: np.ndarray, instruction: str, goal: tuple[int, int], table: EntityTable
 ) -> np.ndarray:
@@ -54,11 +59,8 @@ def separate(
     unique extreme or closest answer unique.
     """
     words = tokenize(instruction)
-    referents, previous = [], 0
-    for m in Lexicon(table, COMMON_WORDS).mentions(words):
-        dr, dc = offset_before(words, previous, m.start)
-        previous = m.end
-        referents.append((goal[0] - dr, goal[1] - dc))
+    offsets = mention_offsets(words, mentions_of(words, table))
+    referents = [(goal[0] - dr, goal[1] - dc) for _, (dr, dc) in offsets]
     out = grid.copy()
     free = free_kind(table)
     for kind in np.unique(grid):
@@ -95,10 +97,7 @@ def grow(
 ) -> np.ndarray:
     """Return the grid with its landmarks drawn over footprints that keep the goal named."""
     words = tokenize(instruction)
-    sides, previous = {}, 0
-    for m in Lexicon(table, COMMON_WORDS).mentions(words):
-        sides.setdefault(m.kind, side_of(offset_before(words, previous, m.start)))
-        previous = m.end
+    sides = named_sides(words, mentions_of(words, table))
     out = grid.copy()
     free = free_kind(table)
     h, w = grid.shape
