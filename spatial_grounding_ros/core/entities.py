@@ -93,6 +93,11 @@ class EntityTable:
         return self.aliases[kind] if self.aliases else ()
 
     @property
+    def free_kind(self) -> int:
+        """Return the table's free ground: its first kind that is no obstacle."""
+        return next(k for k in range(len(self.names)) if k not in self.obstacles)
+
+    @property
     def has_footprints(self) -> bool:
         """Return whether the table's landmarks may cover several cells (`footprints`)."""
         return self.domain != 'puddleworld' if self.footprints is None else self.footprints

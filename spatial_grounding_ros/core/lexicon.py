@@ -255,7 +255,7 @@ class Translation:
         self.table, self.model = table, model
         self.unique = [model.index(n) for n in unique]
         self.nonunique = [model.index(n) for n in nonunique]
-        self.free = next(i for i in range(len(model)) if i not in model.obstacles)
+        self.free = model.free_kind
         self.obstacle = model.obstacles[0]
         landmarks = set(self.unique) | set(self.nonunique)
         self.same_kind = {

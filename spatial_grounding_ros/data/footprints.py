@@ -30,10 +30,6 @@ GROW_SHARE = 0.7  # the share of landmarks drawn over more than one cell
 LARGEST = 3  # a footprint's longest side, in cells
 
 
-def free_kind(table: EntityTable) -> int:
-    return next(k for k in range(len(table)) if k not in table.obstacles)
-
-
 def unknown_kind(table: EntityTable) -> int:
     """Return the kind a table gives unexplored cells: 'unknown', or its last obstacle."""
     if 'unknown' in table.names:
@@ -62,7 +58,7 @@ def separate(
     offsets = mention_offsets(words, mentions_of(words, table))
     referents = [(goal[0] - dr, goal[1] - dc) for _, (dr, dc) in offsets]
     out = grid.copy()
-    free = free_kind(table)
+    free = table.free_kind
     for kind in np.unique(grid):
         if kind in table.obstacles or kind == free:
             continue
@@ -99,7 +95,7 @@ def grow(
     words = tokenize(instruction)
     sides = named_sides(words, mentions_of(words, table))
     out = grid.copy()
-    free = free_kind(table)
+    free = table.free_kind
     h, w = grid.shape
     for r, c in np.argwhere((grid != free) & ~np.isin(grid, table.obstacles)):
         if rng.random() >= GROW_SHARE:
@@ -131,7 +127,7 @@ def unexplored(
 ) -> np.ndarray:
     """Return the grid with 1-3 rectangles of free cells (never the goal) made unknown."""
     out = grid.copy()
-    free, unknown = free_kind(table), unknown_kind(table)
+    free, unknown = table.free_kind, unknown_kind(table)
     h, w = grid.shape
     for _ in range(int(rng.integers(1, 4))):
         rh, rw = (int(x) for x in rng.integers(2, max(3, min(h, w) // 3 + 1), size=2))

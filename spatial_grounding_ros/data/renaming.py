@@ -74,7 +74,7 @@ def rename(
 ) -> tuple[np.ndarray, str]:
     """Return a generated PuddleWorld world and instruction in `table`'s kinds and names."""
     landmarks = [int(k) for k in rng.permutation(landmark_kinds(table))]
-    free = next(k for k in range(len(table)) if k not in table.obstacles)
+    free = table.free_kind
     words = tokenize(instruction)
     named = [PUDDLEWORLD.index(w) for w in words if w in PUDDLEWORLD.names]
     present = [int(k) for k in np.unique(grid) if k not in (GRASS, PUDDLE)]
