@@ -44,7 +44,12 @@ from .lexicon import (
 )
 
 NUMBERS = {
-    **{w: n for n, w in enumerate('one two three four five six seven eight nine ten'.split(), 1)},
+    **{
+        w: n
+        for n, w in enumerate(
+            'one two three four five six seven eight nine ten eleven twelve'.split(), 1
+        )
+    },
     **{str(n): n for n in range(1, 100)},
 }
 # one step in each direction a word names (row 0 is north)

@@ -21,16 +21,12 @@ from dataclasses import dataclass
 import functools
 import re
 
-from .checks import DIRECTIONS
+from .checks import DIRECTIONS, NUMBERS
 
 LEARNED_COUNT = 4  # the longest count the network was trained on
-COUNT_WORDS = {1: 'one', 2: 'two', 3: 'three', 4: 'four'}
-_NUMBER_WORDS = {
-    w: n
-    for n, w in enumerate(
-        'one two three four five six seven eight nine ten eleven twelve'.split(), 1
-    )
-}
+# number words (one .. twelve), as the structural checks read them
+_NUMBER_WORDS = {w: n for w, n in NUMBERS.items() if w.isalpha()}
+COUNT_WORDS = {n: w for w, n in _NUMBER_WORDS.items() if n <= LEARNED_COUNT}
 _AMOUNT = r'(?P<n>\d+(?:[.,]\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + ')'
 _METRES = {'m': 1.0, 'metre': 1.0, 'meter': 1.0, 'cm': 0.01, 'centimetre': 0.01,
            'centimeter': 0.01}  # fmt: skip

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.checks import NUMBERS
 from ..core.text import tokenize
 from ..core.wording import COUNTS, PHRASES
 
@@ -53,7 +54,6 @@ def paraphrase(instruction: str, rng: np.random.Generator, names=()) -> str:
 
 # cell sizes a robot's map has (metres): the metric suite draws one per instruction
 CELL_SIZES = (0.05, 0.1, 0.25, 0.5, 1.0)
-_COUNT_VALUES = {w: n for n, w in enumerate(('one', 'two', 'three', 'four'), 1)}
 
 
 def say_metres(metres: float, rng: np.random.Generator) -> str:
@@ -78,7 +78,7 @@ def in_metres(instruction: str, rng: np.random.Generator) -> tuple[str, float]:
     """
     cell_size = float(CELL_SIZES[rng.integers(len(CELL_SIZES))])
     words = [
-        say_metres(_COUNT_VALUES[w] * cell_size, rng) if w in _COUNT_VALUES else w
+        say_metres(NUMBERS[w] * cell_size, rng) if w in COUNTS else w
         for w in tokenize(instruction)
     ]
     return ' '.join(words), cell_size
