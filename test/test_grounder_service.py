@@ -20,7 +20,8 @@ import pytest
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 pytest.importorskip('spatial_grounding_interfaces', reason='make setup builds the interfaces')
 
-from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
+from conftest import WAIT  # noqa: E402, I100
+from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from grounder_helpers import make_probe, unique_namespace  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
@@ -58,8 +59,9 @@ def nodes(ros_module_context):
     )
     probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
     assert graph.wait_for(probe.connected), 'probe and grounder never matched'
-    client = GroundingClient(NAMESPACE, context=graph.context)
-    assert client.wait_for_server(15), 'no ground_instruction service'
+    # a busy machine may be slow to answer: every call waits as long as the graph waits
+    client = GroundingClient(NAMESPACE, context=graph.context, timeout=WAIT)
+    assert client.wait_for_server(), 'no ground_instruction service'
     yield graph, grounder, probe, client
     client.close()
 
@@ -292,9 +294,9 @@ def test_the_node_grounds_a_table_of_its_own(ros_context, instruction, cell):
             ],
         )
     )
-    client = GroundingClient(namespace, context=graph.context)
+    client = GroundingClient(namespace, context=graph.context, timeout=WAIT)
     try:
-        assert client.wait_for_server(15), 'no ground_instruction service'
+        assert client.wait_for_server(), 'no ground_instruction service'
         grid = np.zeros((10, 10), dtype=np.int64)
         grid[0, :] = 1  # wall (the office table's indices)
         grid[4:6, 3:6] = 7  # a sofa over 2x3 cells: rows 4-5, columns 3-5

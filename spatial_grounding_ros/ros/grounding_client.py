@@ -70,9 +70,17 @@ class GroundingClient:
     Ask the grounder in `namespace` to ground instructions; each call blocks for the answer.
 
     `context`: an rclpy Context (default: the global one, which must be initialised).
+    `timeout`: seconds a call waits when it is given none (a busy machine may want more).
     """
 
-    def __init__(self, namespace: str = '', node_name: str = 'grounding_client', context=None):
+    def __init__(
+        self,
+        namespace: str = '',
+        node_name: str = 'grounding_client',
+        context=None,
+        timeout: float = 10.0,
+    ):
+        self.timeout = timeout
         self.node = Node(node_name, namespace=namespace or '/', context=context)
         self.client = self.node.create_client(GroundInstruction, topics.GROUND_INSTRUCTION)
         self.executor = SingleThreadedExecutor(context=self.node.context)
@@ -82,23 +90,26 @@ class GroundingClient:
     def service_name(self) -> str:
         return self.client.srv_name
 
-    def wait_for_server(self, timeout: float = 10.0) -> bool:
+    def wait_for_server(self, timeout: float | None = None) -> bool:
         """Wait until the grounder (configured: it serves from configure on) is there."""
-        return self.client.wait_for_service(timeout_sec=timeout)
+        return self.client.wait_for_service(timeout_sec=timeout or self.timeout)
 
     def ground(
         self,
         instruction: str,
         entity_map: OccupancyGrid | np.ndarray | None = None,
-        timeout: float = 10.0,
+        timeout: float | None = None,
         frame_id: str = 'map',
     ) -> GroundingAnswer:
         """
         Ground `instruction`; the answer, or TimeoutError after `timeout` seconds.
 
+        `timeout`: default the client's.
+
         `entity_map`: an OccupancyGrid, a (H, W) grid of entity indices (row 0 = north; 1 m
         cells, origin 0, 0, in `frame_id`), or None for the map the grounder holds.
         """
+        timeout = timeout or self.timeout
         request = GroundInstruction.Request(instruction=instruction)
         if isinstance(entity_map, OccupancyGrid):
             request.entity_map = entity_map
