@@ -44,11 +44,14 @@ test: $(INTERFACES)
 test-fast: $(INTERFACES)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q -m fast test
 
+# Every row of the value-map table, trained and evaluated one after another on 2 threads
+# (training is deterministic there: a row's checkpoint is the shipped one, bit for bit):
+# results/value_map.json, results/value_map.md, the shipped checkpoints
 reproduce: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce $(DATA_ARG) --out results
 
-# The reference suite on the shipped PuddleWorld checkpoints (make reproduce runs it too):
-# results/suite.json, results/suite.md
+# The reference suite on the shipped PuddleWorld checkpoints (after `make reproduce`, if it
+# changed one): results/suite.*, results/landmarks.*
 reproduce-suite: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce --suite-only --out results
 
