@@ -31,6 +31,7 @@ PUDDLEWORLD_NAMES = (
     'house',
     'horse',
 )
+PUDDLEWORLD_EMBED_DIM = 7  # the paper's size for PuddleWorld's kinds, and a table's default
 PUDDLEWORLD_UNIQUE = ('star', 'circle', 'triangle', 'heart', 'spade', 'diamond')
 PUDDLEWORLD_NONUNIQUE = ('rock', 'tree', 'house', 'horse')
 
@@ -69,7 +70,8 @@ class EntityTable:
     Entity names, obstacles and the paper's embedding size.
 
     A grid cell holds an index 0..n-1 into `names`; the kinds in `obstacles` have reward -1,
-    and `embed_dim` is the size the paper embeds this domain's kinds at.
+    and `embed_dim` is the size the paper embeds this domain's kinds at (only training on the
+    table reads it: the shipped default reads a table of a user's own by role).
     """
 
     domain: str
@@ -116,21 +118,22 @@ class EntityTable:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> 'EntityTable':
+    def from_dict(cls, d: dict, domain: str = 'custom') -> 'EntityTable':
+        """Return a table from its mapping; `domain` and `embed_dim` may be left out."""
         try:
             names = tuple(str(n) for n in d['names'])
             table = cls(
-                str(d['domain']),
+                str(d.get('domain') or domain),
                 names,
                 tuple(int(i) for i in d['obstacles']),
-                int(d['embed_dim']),
+                int(d.get('embed_dim', PUDDLEWORLD_EMBED_DIM)),
                 aliases_by_kind(names, d.get('aliases') or {}),
                 None if d.get('footprints') is None else bool(d['footprints']),
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(
-                f'entity table is malformed ({exc}); it needs domain, names, '
-                'obstacles and embed_dim, and may give aliases (name: [other words])'
+                f'entity table is malformed ({exc}); it needs names and obstacles, and may '
+                'give aliases (name: [other words]), domain, embed_dim and footprints'
             ) from exc
         bad = [i for i in table.obstacles if not 0 <= i < len(names)]
         if bad:
@@ -152,7 +155,7 @@ class EntityTable:
             raise ValueError(f'{path}: not valid YAML ({exc})') from exc
         if not isinstance(data, dict):
             raise ValueError(f'{path}: an entity table must be a mapping')
-        return cls.from_dict(data)
+        return cls.from_dict(data, domain=path.stem)
 
 
 def aliases_by_kind(names: tuple[str, ...], aliases: dict) -> tuple[tuple[str, ...], ...]:
@@ -173,6 +176,6 @@ def aliases_by_kind(names: tuple[str, ...], aliases: dict) -> tuple[tuple[str, .
     return tuple(out) if any(out) else ()
 
 
-PUDDLEWORLD = EntityTable('puddleworld', PUDDLEWORLD_NAMES, (1,), 7)
+PUDDLEWORLD = EntityTable('puddleworld', PUDDLEWORLD_NAMES, (1,), PUDDLEWORLD_EMBED_DIM)
 ISI = EntityTable('isi', ISI_NAMES, tuple(range(1, len(ISI_NAMES))), 13)
 TABLES = {'puddleworld': PUDDLEWORLD, 'isi': ISI}
