@@ -21,6 +21,7 @@ from spatial_grounding_ros.core.lexicon import (
     Translation,
     within_one_edit,
 )
+from spatial_grounding_ros.grounder import Grounder
 import yaml
 
 KITCHEN = {
@@ -49,6 +50,15 @@ def test_a_table_reads_aliases_and_writes_them_back(tmp_path):
     assert EntityTable.from_dict(PUDDLEWORLD.to_dict()) == PUDDLEWORLD
 
 
+def test_a_users_table_needs_only_names_and_obstacles(tmp_path):
+    path = tmp_path / 'galley.yaml'
+    path.write_text(yaml.safe_dump({'names': ['deck', 'bulkhead', 'stove'], 'obstacles': [1]}))
+    table = EntityTable.from_yaml(path)
+    assert (table.domain, table.embed_dim) == ('galley', PUDDLEWORLD.embed_dim)
+    with pytest.raises(ValueError, match='it needs names and obstacles'):
+        EntityTable.from_dict({'names': ['deck']})
+
+
 @pytest.mark.parametrize(
     'change, message',
     [
@@ -61,6 +71,17 @@ def test_a_table_reads_aliases_and_writes_them_back(tmp_path):
 def test_a_malformed_table_says_what_is_wrong(change, message):
     with pytest.raises(ValueError, match=message):
         EntityTable.from_dict({**KITCHEN, **change})
+
+
+def test_free_ground_is_never_a_landmark():
+    table = EntityTable.from_dict({'names': ['tiles', 'wall', 'oven'], 'obstacles': [1]})
+    lexicon = Lexicon(table, COMMON_WORDS)
+    # a floor of tiles: "tile" is the cell, as in any instruction
+    assert [m.kind for m in lexicon.mentions('go to the tile above the oven')] == [2]
+    grid = np.zeros((8, 8), dtype=np.int64)
+    grid[5, 4] = 2
+    g = Grounder.from_checkpoint(entities=table)
+    assert g.ground(grid, 'move to the tile 3 cells above the oven').goal == (2, 4)
 
 
 def test_plurals_and_edits():

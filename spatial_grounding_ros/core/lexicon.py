@@ -99,6 +99,8 @@ class Lexicon:
         self.protected = frozenset(protected)
         phrases: dict[tuple[str, ...], int] = {}
         for kind, name in enumerate(table.names):
+            if kind == table.free_kind:  # free ground is where a goal is, never a landmark:
+                continue  # "the tile above the oven" with a floor of `tiles` is a cell
             for text in (name, *table.aliases_of(kind)):
                 words = phrase_words(text)
                 if not words:
