@@ -83,6 +83,29 @@ def test_several_landmarks_named_as_one_are_ambiguous_unless_something_picks_one
     assert grounder.ground(grid, 'reach the rock closest to the tree').reason is None
 
 
+def test_an_extreme_two_landmarks_share_is_ambiguous(grounder):
+    grid = pw_map()
+    grid[1, 1] = grid[1, 8] = ROCK  # two rocks on the top row
+    g = grounder.ground(grid, 'reach the northernmost rock')
+    assert (g.goal, g.reason) == (None, 'ambiguous: 2 rocks tie as northernmost')
+    assert grounder.ground(grid, 'go to the topmost rock').reason_code == 'ambiguous'
+    assert grounder.ground(grid, 'reach the westernmost rock').goal == (1, 1)
+
+
+def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
+    table, grid = office_map()
+    grid[8, 1] = grid[2, 2] = 0
+    grid[3, 1] = grid[4:7, 7] = table.index('chair')  # one chair, and one three cells tall
+    office = Grounder.from_checkpoint(entities=OFFICE)
+    assert office.ground(grid, 'reach the northernmost chair').goal == (3, 1)
+    # the tall one now spans rows 3-6: taken at its middle (row 4) it is not northernmost,
+    # but "above" takes each chair at its top edge, and rows 3 and 3 tie
+    grid[3, 7] = table.index('chair')
+    assert office.ground(grid, 'reach the northernmost chair').goal == (3, 1)
+    g = office.ground(grid, 'go to the cell above the northernmost chair')
+    assert g.reason == 'ambiguous: 2 chairs tie as northernmost'
+
+
 def test_a_grounding_less_sure_than_the_minimum_declines():
     strict = Grounder.from_checkpoint(min_confidence=0.999)
     g = strict.ground(pw_map(), 'reach the cell near the tree and the house')

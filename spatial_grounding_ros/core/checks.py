@@ -17,7 +17,8 @@ words, and returns a reason or None:
   above the bottom one);
 - `ambiguous: 3 rocks`: the one landmark named is one the map holds more than once, with
   nothing that picks one ("below the rock", but not "below the westernmost rock" or "the
-  rock in the top row").
+  rock in the top row"); and `ambiguous: 2 stools tie as northernmost`, when the word that
+  picks one is an extreme that two of them share.
 
 - `goal-on-obstacle`: the one landmark named, held once, has its named offset on an
   obstacle.
@@ -33,7 +34,7 @@ from dataclasses import replace
 import numpy as np
 
 from .entities import EntityTable
-from .footprints import side_of
+from .footprints import anchor, footprints, side_of
 from .lexicon import (
     COMMON_WORDS,
     count_objects,
@@ -63,6 +64,19 @@ DIRECTIONS = {
     'southeast': (1, 1),
     'southwest': (1, -1),
 }
+# an extreme before a name ("the topmost stool") -> (axis, sign): the landmark with the
+# largest sign * coordinate of its edge on that axis (row 0 is north)
+EXTREME_SIDES = {
+    **dict.fromkeys(
+        'northernmost northmost topmost uppermost upmost highest top upper northern'.split(),
+        (0, -1),
+    ),
+    **dict.fromkeys(
+        'southernmost southmost bottommost lowermost lowest bottom lower southern'.split(), (0, 1)
+    ),
+    **dict.fromkeys('westernmost westmost leftmost left western'.split(), (1, -1)),
+    **dict.fromkeys('easternmost eastmost rightmost right eastern'.split(), (1, 1)),
+}
 # direction words that describe a landmark when they stand right before its name
 ADJECTIVES = frozenset('left right top bottom upper lower'.split())
 # words before a name that pick one of several ("the left horse", "the second tree")
@@ -72,6 +86,10 @@ QUALIFIERS = EXTREME_WORDS | frozenset(
     'eastmost center centre central centermost middlemost another other leftmost rightmost '
     'topmost uppermost bottommost lowermost highest lowest west east north south'.split()
 )
+# words before an extreme that say it is one of several that pick the landmark together
+# ("the left topmost horse", "topmost and eastmost rock", "the higher of westernmost houses",
+# "the two topmost trees")
+COMPOUNDING = frozenset('and or of both'.split()) | QUALIFIERS | frozenset(NUMBERS)
 # words after a name that go on to say which one ("the rock in the top row", "near the tree")
 CLAUSES = RELATION_WORDS | frozenset('in on at of with that which by from farthest'.split())
 # words after a name that end its phrase
@@ -175,17 +193,58 @@ def _neighbour_words(words: list[str], m: Mention) -> tuple[list[str], list[str]
     return before, after
 
 
-def ambiguous(grid: np.ndarray, words: list[str], m: Mention, mentions: list[Mention]) -> bool:
+def _compound_extreme(words: list[str], m: Mention, mentions: list[Mention]) -> bool:
     """
-    Return whether the only landmark named is one the map holds more than once, unpicked.
+    Return whether more than the extreme before a name picks the landmark.
 
-    With another landmark named, the two together usually pick one ("the heart to the left
-    of the horse"), so only a lone reference is judged.
+    Another extreme before it ("topmost and leftmost tree"), a side after it ("the upmost
+    rock to the right"), or the name said twice ("the horse above the easternmost horse").
     """
-    if len({x.kind for x in mentions}) > 1 or count_objects(grid, m.kind) < 2:
-        return False
+    kept = [w for w in words[:m.start] if w not in FILLER_WORDS]
+    return (
+        len(kept) > 1
+        and kept[-2] in COMPOUNDING
+        or bool(set(words[m.end:]) & (QUALIFIERS | set(DIRECTIONS)))
+        or sum(x.kind == m.kind for x in mentions) > 1
+    )
+
+
+def ambiguity(
+    grid: np.ndarray,
+    words: list[str],
+    m: Mention,
+    mentions: list[Mention],
+    drawn_over_cells: bool = True,
+):
+    """
+    Return why the only landmark named is ambiguous, as (how many, why), or None.
+
+    It is when the map holds it more than once and nothing picks one ((3, '')), or an
+    extreme picks two or more ((2, 'tie as northernmost')). With another landmark named, the
+    two together usually pick one ("the heart to the left of the horse"), so only a lone
+    reference is judged. `drawn_over_cells`: the table's landmarks may cover several cells
+    (EntityTable.has_footprints); if not, each cell is one for the extremes, as the grounder
+    and the generator take them.
+    """
+    count = count_objects(grid, m.kind)
+    if len({x.kind for x in mentions}) > 1 or count < 2:
+        return None
     before, after = _neighbour_words(words, m)
-    return not (set(before) & QUALIFIERS or set(after) & CLAUSES)
+    if set(after) & CLAUSES:
+        return None
+    if before and before[0] in EXTREME_SIDES:
+        if _compound_extreme(words, m, mentions):
+            return None
+        # compared as the grounder compares them: each landmark at its anchor (footprints.py)
+        axis, sign = EXTREME_SIDES[before[0]]
+        side = named_sides(words, mentions).get(m.kind, (0, 0))
+        landmarks = (
+            footprints(grid, m.kind) if drawn_over_cells else np.argwhere(grid == m.kind)[:, None]
+        )
+        keys = [sign * anchor(cells, side)[axis] for cells in landmarks]
+        ties = keys.count(max(keys))
+        return (ties, f'tie as {before[0]}') if ties > 1 else None
+    return None if set(before) & QUALIFIERS else (count, '')
 
 
 def unknown_landmark(words: list[str], known, mentions: list[Mention]) -> str | None:
@@ -258,7 +317,12 @@ def structural_reason(
     if on_obstacle(table, grid, words, mentions):
         return 'goal-on-obstacle'
     for m in mentions:
-        if m.kind not in table.obstacles and ambiguous(grid, words, m, mentions):
-            n = count_objects(grid, m.kind)
-            return f'ambiguous: {n} {said(table, m.kind)}s'
+        found = (
+            None
+            if m.kind in table.obstacles
+            else ambiguity(grid, words, m, mentions, table.has_footprints)
+        )
+        if found is not None:
+            n, why = found
+            return f'ambiguous: {n} {said(table, m.kind)}s' + (f' {why}' if why else '')
     return None
