@@ -30,6 +30,11 @@ from spatial_grounding_ros.grounder import Grounder
         ('go to the leftmost house', 'reach the westernmost house'),
         ('move to the place in between the star and the circle',
          'reach the cell between the star and the circle'),
+        ('go to the second square below the sink', 'reach the cell two below the sink'),
+        ('move 2 squares downward from the bin', 'reach two below the bin'),
+        ('go to the area right above the lamp', 'reach the cell above the lamp'),
+        ('head to the chair nearest the door', 'reach the chair closest to the door'),
+        ('stop right next to the fridge', 'reach closest to the fridge'),
         ('reach cell two below star', 'reach cell two below star'),  # the model's own
         ('reach cell to left of star', 'reach cell to left of star'),
     ],

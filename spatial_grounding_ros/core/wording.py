@@ -27,8 +27,11 @@ from .text import tokenize
 
 # canonical words -> the other wordings of them (each a phrase of one or more words)
 PHRASES = {
-    'below': ['under', 'beneath', 'underneath', 'south of', 'down from'],
-    'above': ['over', 'north of', 'up from'],
+    'below': [
+        'under', 'beneath', 'underneath', 'south of', 'down from', 'downward from',
+        'downwards from', 'right below', 'right under', 'right beneath',
+    ],
+    'above': ['over', 'north of', 'up from', 'upward from', 'upwards from', 'right above'],
     'to the left of': ['west of', 'to the west of', 'on the west of', 'on the left side of'],
     'to the right of': ['east of', 'to the east of', 'on the east of', 'on the right side of'],
     'to top left of': ['northwest of', 'above and to the left of', 'up and to the left of'],
@@ -37,7 +40,9 @@ PHRASES = {
     'to bottom right of': [
         'southeast of', 'below and to the right of', 'down and to the right of',
     ],
-    'closest to': ['nearest to', 'next to', 'near to'],
+    'closest to': ['nearest to', 'next to', 'near to', 'right next to'],
+    # "the chair nearest the door": the model learned the relation with its "to"
+    'closest to the': ['nearest the', 'closest the'],
     'between': ['in between', 'halfway between', 'midway between'],
     'westernmost': ['leftmost', 'farthest west', 'most western', 'furthest west'],
     'easternmost': ['rightmost', 'farthest east', 'most eastern', 'furthest east'],
@@ -46,9 +51,16 @@ PHRASES = {
     'reach': [
         'go to', 'move to', 'drive to', 'navigate to', 'head to', 'travel to', 'get to',
         'proceed to', 'stop on', 'stop at', 'park on', 'park at', 'go', 'move', 'drive',
-        'navigate', 'head', 'find',
+        'navigate', 'head', 'find', 'stop', 'park', 'wait', 'go over to', 'head over to',
+        'come to', 'take me to',
     ],
-    'cell': ['square', 'spot', 'tile', 'space', 'position', 'place', 'location'],
+    'cell': ['square', 'spot', 'tile', 'space', 'position', 'place', 'location', 'area'],
+    # an ordinal cell is a count: "the second square below the sink"
+    **{
+        f'cell {count}': [f'{ordinal} {unit}' for unit in 'cell square space spot tile'.split()]
+        for count, ordinal in zip(('one', 'two', 'three', 'four'),
+                                  ('first', 'second', 'third', 'fourth'))
+    },
     'one': ['1'],
     'two': ['2'],
     'three': ['3'],
