@@ -31,7 +31,14 @@ from .core.footprints import reduce_footprints
 from .core.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
 from .core.units import offsets
-from .core.wording import canonical, cell_for_fixed_target, drop_unknown, tidy, wording_words
+from .core.wording import (
+    canonical,
+    cell_for_fixed_target,
+    drop_unknown,
+    reworded,
+    tidy,
+    wording_words,
+)
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 
@@ -261,7 +268,7 @@ class Grounder:
         values, aux = self.model.ground(torch.as_tensor(model_grid)[None], code, return_aux=True)
         values = shifted(values[0].numpy(), distances.extra)
         best, confidence, alternatives = self.judge(values)
-        reason = structural_reason(self.entities, grid, words, mentions, self.known)
+        reason = structural_reason(self.entities, grid, *reworded(words, mentions), self.known)
         if reason is None and int(grid[best]) in self.entities.obstacles:
             reason = 'goal-on-obstacle'
         if reason is None and confidence < self.min_confidence:
@@ -292,7 +299,7 @@ class Grounder:
         The side each landmark's offset leaves it on is read from the words before its
         mention (core/footprints.py).
         """
-        sides = named_sides(tokenize(text), list(translated.mentions))
+        sides = named_sides(*reworded(tokenize(text), list(translated.mentions)))
         sides = {translated.kinds[k]: side for k, side in sides.items() if k in translated.kinds}
         return reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
 

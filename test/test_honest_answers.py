@@ -92,6 +92,23 @@ def test_an_extreme_two_landmarks_share_is_ambiguous(grounder):
     assert grounder.ground(grid, 'reach the westernmost rock').goal == (1, 1)
 
 
+@pytest.mark.parametrize(
+    'instruction, goal',
+    [
+        ('go over to the couch', (1, 3)),  # "over" is the verb's: read as an offset, a wall
+        ('head to the second square below the couch', (3, 3)),  # one below is a wall
+        ('stop right above the refrigerator', (6, 9)),  # no side: one right is off the map
+    ],
+)
+def test_the_checks_read_the_wording_the_model_reads(instruction, goal):
+    table = EntityTable.from_yaml(OFFICE)
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[0, :] = grid[2, 3] = table.index('wall')
+    grid[1, 3], grid[7, 9] = table.index('sofa'), table.index('fridge')
+    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    assert (g.reason, g.goal) == (None, goal), g.model_instruction
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

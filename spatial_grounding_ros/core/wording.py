@@ -20,9 +20,11 @@ data/paraphrase.py draws wordings from the same table to measure it.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Iterable
 
 from .checks import DIRECTIONS, offset_before
+from .lexicon import Mention
 from .text import tokenize
 
 # canonical words -> the other wordings of them (each a phrase of one or more words)
@@ -112,8 +114,27 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
     Indices in `keep` (a landmark's name) are never rewritten; a unit word after a count is
     dropped; a verb is the model's only where it opens the request (after any filler).
     """
-    keep = set(keep)
-    out, i = [], 0
+    return _canonical(words, set(keep))[0]
+
+
+def reworded(words: list[str], mentions: list[Mention]) -> tuple[list[str], list[Mention]]:
+    """
+    Return the words in the model's wording and the landmarks named, moved to match.
+
+    What reads an instruction's offsets and sides (core/checks.py, the footprint anchors)
+    reads this: "go over to the couch" names no offset, "two right above" is "two above".
+    """
+    keep = {i for m in mentions for i in range(m.start, m.end)}
+    out, source = _canonical(words, keep)
+    where = {i: at for at, i in enumerate(source) if i is not None}
+    return out, [replace(m, start=where[m.start], end=where[m.end - 1] + 1) for m in mentions]
+
+
+def _canonical(words: list[str], keep: set[int]) -> tuple[list[str], list[int | None]]:
+    """Return canonical's words and, for each, the index of the word it kept (None: new)."""
+    out: list[str] = []
+    source: list[int | None] = []
+    i = 0
     while i < len(words):
         if words[i] in UNITS and out and out[-1] in COUNTS and i not in keep:
             i += 1
@@ -130,12 +151,14 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
                 continue  # "the spot two below", not a "spot" dropped anywhere
             if tuple(words[i:i + n]) == wording and not keep & set(range(i, i + n)):
                 out += canon
+                source += [None] * len(canon)
                 i += n
                 break
         else:
             out.append(words[i])
+            source.append(i)
             i += 1
-    return out
+    return out, source
 
 
 def wording_words() -> frozenset[str]:
