@@ -37,6 +37,7 @@ from .core.wording import (
     drop_unknown,
     reworded,
     tidy,
+    unpossessed,
     wording_words,
 )
 from .models.checkpoints import load_checkpoint, Loaded
@@ -253,7 +254,9 @@ class Grounder:
         """
         self.check(grid, instruction)
         grid = np.asarray(grid, dtype=np.int64)
-        distances = offsets(instruction, self.cell_size if cell_size is None else cell_size)
+        distances = offsets(
+            unpossessed(instruction), self.cell_size if cell_size is None else cell_size
+        )
         words = tokenize(distances.text)
         if self.translation is not None:
             translated = self.translation(grid, distances.model_text)

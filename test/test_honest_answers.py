@@ -98,6 +98,8 @@ def test_an_extreme_two_landmarks_share_is_ambiguous(grounder):
         ('go over to the couch', (1, 3)),  # "over" is the verb's: read as an offset, a wall
         ('head to the second square below the couch', (3, 3)),  # one below is a wall
         ('stop right above the refrigerator', (6, 9)),  # no side: one right is off the map
+        ("go to the refrigerator's left", (7, 8)),
+        ("drive two squares to the couch's right side", (1, 5)),
     ],
 )
 def test_the_checks_read_the_wording_the_model_reads(instruction, goal):

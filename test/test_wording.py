@@ -14,6 +14,7 @@ from spatial_grounding_ros.core.wording import (
     cell_for_fixed_target,
     drop_unknown,
     tidy,
+    unpossessed,
 )
 from spatial_grounding_ros.data.paraphrase import paraphrase
 from spatial_grounding_ros.grounder import Grounder
@@ -127,3 +128,12 @@ def test_words_the_wording_layer_reads_are_not_reported_unknown(grounder):
     grid[3, 4] = 2  # a star
     g = grounder.ground(grid, 'please go two squares south of the star zorp')
     assert g.unknown_words == ['zorp']
+
+
+def test_a_side_said_as_the_landmarks_own_is_the_side_of_it():
+    assert unpossessed("go 2 cells to the fridge's left") == 'go 2 cells to the left of the fridge'
+    assert unpossessed("the coffee machine's right hand side") == (
+        'the right of the coffee machine'
+    )
+    assert unpossessed("the plant's southern side") == 'the south of the plant'
+    assert unpossessed("the fridge's door") == "the fridge's door"  # no side: as it was

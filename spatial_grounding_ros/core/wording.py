@@ -21,6 +21,7 @@ data/paraphrase.py draws wordings from the same table to measure it.
 from __future__ import annotations
 
 from dataclasses import replace
+import re
 from typing import Iterable
 
 from .checks import DIRECTIONS, offset_before
@@ -164,6 +165,18 @@ def _canonical(words: list[str], keep: set[int]) -> tuple[list[str], list[int | 
 def wording_words() -> frozenset[str]:
     """Return every word of the wordings this module reads: none of them names a landmark."""
     return frozenset(w for ws in PHRASES.values() for p in ws for w in tokenize(p)) | UNITS
+
+
+# "the fridge's left (side)" -> "the left of the fridge": a side said as the landmark's own
+_POSSESSED_SIDE = re.compile(
+    r"\b(?:the |a )?((?:[a-z0-9]+ )?[a-z0-9]+)'s (left|right|top|bottom|north|south|east|west)"
+    r"(?:ern)?(?: hand)?(?: side)?\b"
+)
+
+
+def unpossessed(text: str) -> str:
+    """Return the text with each side said as a landmark's own said as "the <side> of"."""
+    return _POSSESSED_SIDE.sub(r'the \2 of the \1', text.lower())
 
 
 def drop_unknown(words: list[str], known) -> list[str]:
