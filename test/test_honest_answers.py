@@ -111,6 +111,15 @@ def test_the_checks_read_the_wording_the_model_reads(instruction, goal):
     assert (g.reason, g.goal) == (None, goal), g.model_instruction
 
 
+def test_in_front_of_and_behind_name_no_side_on_a_map():
+    table, grid = office_map()
+    office = Grounder.from_checkpoint(entities=OFFICE)
+    g = office.ground(grid, 'stop in front of the fridge')
+    assert (g.goal, g.reason) == (None, 'ambiguous: "in front of" names no side on a map')
+    assert office.ground(grid, 'wait behind the couch').reason_code == 'ambiguous'
+    assert office.ground(grid, 'go one cell below the fridge').reason is None
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

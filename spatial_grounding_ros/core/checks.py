@@ -20,6 +20,8 @@ words, and returns a reason or None:
   rock in the top row"); and `ambiguous: 2 stools tie as northernmost`, when the word that
   picks one is an extreme that two of them share.
 
+- `ambiguous: "in front of" names no side on a map`: in front of and behind depend on
+  which way the landmark faces, which the map does not say.
 - `goal-on-obstacle`: the one landmark named, held once, has its named offset on an
   obstacle.
 
@@ -86,6 +88,8 @@ QUALIFIERS = EXTREME_WORDS | frozenset(
     'eastmost center centre central centermost middlemost another other leftmost rightmost '
     'topmost uppermost bottommost lowermost highest lowest west east north south'.split()
 )
+# relations a person faces a landmark with, which a map seen from above has no side for
+SIDELESS = ('in front of', 'behind', 'in back of')
 # words before an extreme that say it is one of several that pick the landmark together
 # ("the left topmost horse", "topmost and eastmost rock", "the higher of westernmost houses",
 # "the two topmost trees")
@@ -310,6 +314,9 @@ def structural_reason(
     word = unknown_landmark(words, known, mentions)
     if word is not None:
         return f'unknown-landmark: {word}'
+    sideless = next((w for w in SIDELESS if f' {w} ' in f' {" ".join(words)} '), None)
+    if mentions and sideless:
+        return f'ambiguous: "{sideless}" names no side on a map'
     # the rest reads the words around a name: an unknown word there says nothing
     words, mentions = without_unknown(words, known, mentions)
     if off_map(grid, words, mentions):
