@@ -32,6 +32,7 @@ from spatial_grounding_ros.grounder import Grounder
         ('move to the place in between the star and the circle',
          'reach the cell between the star and the circle'),
         ('go to the second square below the sink', 'reach the cell two below the sink'),
+        ('drive to the place upward from the sink', 'reach the cell above the sink'),
         ('move 2 squares downward from the bin', 'reach two below the bin'),
         ('go to the area right above the lamp', 'reach the cell above the lamp'),
         ('head to the chair nearest the door', 'reach the chair closest to the door'),

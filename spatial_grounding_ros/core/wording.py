@@ -85,6 +85,14 @@ CELL_AFTER = COUNTS | frozenset(DIRECTIONS) | frozenset(
     '1 2 3 4 to on at in with of by next near nearest closest between directly just right '
     'left that which where'.split()
 )
+# ... and any first word of the other wordings of a relation ("the place upward from"), but
+# not of an extreme's: a "square" before "the leftmost" is no cell of the request
+CELL_AFTER |= frozenset(
+    tokenize(w)[0]
+    for canon, wordings in PHRASES.items()
+    if canon and canon != 'reach' and not canon.startswith('cell') and not canon.endswith('most')
+    for w in wordings
+)
 # the words a cell's other names follow when they name the cell of the request
 CELL_BEFORE = frozenset('reach the a that this'.split())
 
