@@ -219,6 +219,13 @@ def test_rl_table_is_the_json():
         assert int(row['episodes']) == run['episodes']
 
 
+def test_every_rl_row_is_at_least_the_papers():
+    """The README's claim: on every RL row PQ is at least the paper's and MD at most its."""
+    for r in json.loads((RESULTS / 'rl.json').read_text())['results']:
+        pq, md = TASKS[r['task']].paper_rl[r['model']]
+        assert r['test']['pq'] >= pq and r['test']['md'] <= md, (r['task'], r['model'])
+
+
 def test_suite_table_is_the_json():
     """results/suite.md: each checkpoint's hit per family and size is suite.json's."""
     runs = json.loads((RESULTS / 'suite.json').read_text())['runs']
