@@ -96,7 +96,7 @@ def test_goal_loss_points_only_maps_with_a_found_goal_at_it():
 
 
 def test_goal_weight_defaults_to_the_tasks():
-    """Check the task defaults: PuddleWorld and generated worlds 0.3, ISI 0.05; a given one wins."""
+    """Check the task defaults: PuddleWorld and generated worlds 0.3, ISI 0.05; one given wins."""
     shape = (10, 10)
     assert resolve_config(RLConfig(), 'pw-local', shape).goal_weight == 0.3
     assert resolve_config(RLConfig(), 'generator-local', shape).goal_weight == 0.3

@@ -178,7 +178,7 @@ def wording_words() -> frozenset[str]:
 # "the fridge's left (side)" -> "the left of the fridge": a side said as the landmark's own
 _POSSESSED_SIDE = re.compile(
     r"\b(?:the |a )?((?:[a-z0-9]+ )?[a-z0-9]+)'s (left|right|top|bottom|north|south|east|west)"
-    r"(?:ern)?(?: hand)?(?: side)?\b"
+    r'(?:ern)?(?: hand)?(?: side)?\b'
 )
 
 
