@@ -98,34 +98,92 @@ def fits(obj, description):
     )
 
 
-def test_labels_are_true_to_the_scene_and_false_ones_plausible(data):
-    for text, label, objects in zip(data.statements, data.labels, data.objects):
-        subject, relation, reference = read(text)
-        objs = boxes(objects)
-        a = [o for o in objs if fits(o, subject)]
-        b = [o for o in objs if fits(o, reference)]
-        assert a and b, f'{text}: both objects exist'
-        assert not [o for o in a if fits(o, reference)], f'{text}: no object is both'
-        axis = 0 if 'left' in relation or 'right' in relation else 1
-        sign = -1 if relation in ('to the left of', 'above') else 1
+def named(description):
+    """Return the words a description names, shape and colour, None left out."""
+    return {w for w in description if w is not None}
 
-        def centre(o):
-            return o[2 + axis] + (o[4] - 1) / 2
 
-        holds = any(sign * (centre(p) - centre(q)) > 0 for p in a for q in b)
-        assert holds == bool(label), text
-        assert all(abs(centre(p) - centre(q)) >= sw.MARGIN for p in a for q in b)
+def check_statement(text, label, objects, reason):
+    """
+    Read one statement against its scene, from the task's definition, and check its label.
+
+    True: objects fit both sides, the relation holds for some pair. False for its reason:
+    'relation' (both sides fit objects, the relation holds for no pair), 'subject' or
+    'reference' (no object fits that side, some object fits the other).
+    """
+    subject, relation, reference = read(text)
+    objs = boxes(objects)
+    a = [o for o in objs if fits(o, subject)]
+    b = [o for o in objs if fits(o, reference)]
+    assert not [o for o in a if fits(o, reference)], f'{text}: no object is both'
+    # one side's words within the other's: such a statement could never be true
+    assert not named(subject) <= named(reference), text
+    assert not named(reference) <= named(subject), text
+    assert bool(label) == (reason == 'true'), (text, reason)
+    if reason == 'subject':
+        assert not a and b, f'{text}: no {subject}, but a {reference}'
+        return
+    if reason == 'reference':
+        assert a and not b, f'{text}: a {subject}, but no {reference}'
+        return
+    assert reason in ('true', 'relation') and a and b, f'{text}: both objects exist'
+    axis = 0 if 'left' in relation or 'right' in relation else 1
+    sign = -1 if relation in ('to the left of', 'above') else 1
+
+    def centre(o):
+        return o[2 + axis] + (o[4] - 1) / 2
+
+    holds = any(sign * (centre(p) - centre(q)) > 0 for p in a for q in b)
+    assert holds == bool(label), text
+    assert all(abs(centre(p) - centre(q)) >= sw.MARGIN for p in a for q in b)
+
+
+def test_labels_are_true_to_the_scene_and_each_false_one_for_its_reason(data):
+    for text, label, objects, reason in zip(
+        data.statements, data.labels, data.objects, data.reasons
+    ):
+        check_statement(text, label, objects, reason)
+
+
+def test_false_statements_come_from_the_three_sources_in_their_mix(data):
+    false = [r for r, label in zip(data.reasons, data.labels) if not label]
+    assert set(false) == {'relation', 'subject', 'reference'}
+    n = len(false)
+    shares = {
+        'relation': 1 - sw.ABSENT,
+        'subject': sw.ABSENT * sw.SUBJECT,
+        'reference': sw.ABSENT * (1 - sw.SUBJECT),
+    }
+    for reason, share in shares.items():
+        got = false.count(reason)
+        assert abs(got - n * share) < 5 * np.sqrt(n * share * (1 - share)), (reason, got)
+    # the changed attribute is sometimes one the image has: both words name something in the
+    # image, never together ("a red square" beside a red circle and a blue square)
+    binding = 0
+    for text, objects, reason in zip(data.statements, data.objects, data.reasons):
+        if reason in ('subject', 'reference'):
+            shape, colour = read(text)[0 if reason == 'subject' else 2]
+            objs = boxes(objects)
+            binding += bool(
+                shape and colour
+                and any(sw.SHAPES[o[0]] == shape for o in objs)
+                and any(sw.COLOUR_NAMES[o[1]] == colour for o in objs)
+            )
+    assert binding >= 5
 
 
 def test_labels_are_balanced_overall_and_per_kind_of_statement(data):
     assert data.labels.mean() == 0.5
-    by_relation = {}
+    by_relation, by_kinds = {}, {}
     for text, label in zip(data.statements, data.labels):
-        by_relation.setdefault(read(text)[1], []).append(label)
+        subject, relation, reference = read(text)
+        by_relation.setdefault(relation, []).append(label)
+        kinds = tuple((s is None, c is None) for s, c in (subject, reference))
+        by_kinds.setdefault(kinds, []).append(label)
     assert set(by_relation) == set(sw.RELATIONS)
-    for relation, labels in by_relation.items():
-        # about 100 each: 5 standard deviations from a half
-        assert abs(np.mean(labels) - 0.5) < 5 * 0.5 / np.sqrt(len(labels)), relation
+    for labels in [*by_relation.values(), *by_kinds.values()]:
+        # about 100 each by relation, 44 by kinds: 5 standard deviations from a half
+        assert abs(np.mean(labels) - 0.5) < 5 * 0.5 / np.sqrt(len(labels)), labels
     kinds = {(s is None, c is None) for text in data.statements for s, c in read(text)[::2]}
     assert kinds == {(False, True), (True, False), (False, False)}, 'shape, colour and both'
 
@@ -141,17 +199,18 @@ def test_curriculum_statements_name_both_objects_by_colour_only():
         sw.generate(2, descriptions=('size',))
 
 
-def test_curriculum_false_statements_name_an_absent_object():
-    data = sw.generate(200, seed=4, absent=1.0)
+@pytest.mark.parametrize('absent, reasons', [
+    (1.0, {'subject', 'reference'}),  # the warm-up: every false one names an absent object
+    (0.0, {'relation'}),  # the previous data: every false one plausible
+])
+def test_false_statements_of_one_kind_only(absent, reasons):
+    data = sw.generate(200, seed=4, absent=absent)
     assert data.labels.mean() == 0.5
-    for text, label, objects in zip(data.statements, data.labels, data.objects):
-        subject, _, reference = read(text)
-        objs = boxes(objects)
-        a = [o for o in objs if fits(o, subject)]
-        b = [o for o in objs if fits(o, reference)]
-        assert not [o for o in a if fits(o, reference)], f'{text}: no object is both'
-        # true: both sides exist (and the relation holds, as in the splits); false: one lacks
-        assert bool(a and b) == bool(label), text
+    assert {r for r, label in zip(data.reasons, data.labels) if not label} == reasons
+    for text, label, objects, reason in zip(
+        data.statements, data.labels, data.objects, data.reasons
+    ):
+        check_statement(text, label, objects, reason)
     with pytest.raises(ValueError, match='fraction'):
         sw.generate(2, absent=1.5)
 
@@ -159,10 +218,14 @@ def test_curriculum_false_statements_name_an_absent_object():
 def test_generation_is_seeded_and_cached(tmp_path):
     a = sw.load_split('test', tmp_path, n=30)
     [path] = tmp_path.glob('*.npz')
+    assert path.name == f'shapeworld-v{sw.VERSION}-test-absent0.667-30-seed0.npz'
+    assert sw.load_split('test', tmp_path, n=30, absent=0).reasons.count('relation') == 15
+    path = tmp_path / path.name
     before = path.stat().st_mtime_ns
     b = sw.load_split('test', tmp_path, n=30)
     assert path.stat().st_mtime_ns == before, 'the second call reads the file'
     assert np.array_equal(a.images, b.images) and a.statements == b.statements
+    assert a.reasons == b.reasons and set(a.reasons) == set(sw.REASONS)
     assert np.array_equal(a.images, sw.generate(30, seed=sw.SPLIT_SEEDS['test']).images)
     train_split = sw.load_split('train', tmp_path, n=30)
     assert train_split.statements != a.statements, 'splits come from different streams'
@@ -190,6 +253,30 @@ def test_noise_leaves_objects_and_statement_words_in_place(data):
         inserted = [w for w in words if w not in text.split() or w in sw.NOISE_WORDS]
         assert len(inserted) >= 3
     assert sw.text_noise(['a b'], 0, rng) == ['a b']
+
+
+def test_results_tables_show_each_reason_and_the_all_plausible_split():
+    """reproduce.markdown_tables: one row a model, its accuracy on each reason, both splits."""
+    from spatial_grounding_ros.shapeworld.reproduce import markdown_tables, NOISE_KS
+
+    by = {r: {'acc': 0.5, 'n': 10} for r in sw.REASONS}
+    rows = [{
+        'model': m, 'epochs': 13, 'train_seconds': 60.0,
+        'test': {'acc': acc, 'n': 40, 'by_reason': by},
+        'test_plausible': {'acc': 0.625, 'n': 40},
+    } for m, acc in (('t-vgg', 0.55), ('t-rnet-attn', 0.875))]
+    noise = [{'model': m, 'noise': kind, 'k': k, 'acc': 0.5, 'n': 40}
+             for m in ('t-vgg', 't-rnet-attn') for kind in ('image', 'text') for k in NOISE_KS]
+    main, noisy = markdown_tables(rows, noise)
+    header, rule, vgg, rnet = [line for line in main.splitlines() if line.startswith('|')]
+    cells = [c.strip() for c in vgg.strip('|').split('|')]
+    names = [c.strip() for c in header.strip('|').split('|')]
+    assert len(cells) == len(names) == rule.count('---')
+    row = dict(zip(names, cells))
+    assert (row['ACC ours'], row['n'], row['all-plausible test']) == ('0.550', '40', '0.625')
+    assert row['false: no subject (n)'] == '0.500 (10)' and row['train min'] == '1.0'
+    assert rnet.startswith('| t-rnet-attn | 0.875 | 0.72 |')
+    assert noisy.count('\n| image |') == len(NOISE_KS)
 
 
 def test_relation_scores_each_pair_at_its_offset():

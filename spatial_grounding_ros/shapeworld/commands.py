@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 
-from .data import load_split, SPLIT_SIZES
+from .data import ABSENT, load_split, SPLIT_SIZES
 from .models import MODELS
 from .reproduce import reproduce, REPRODUCED
 from .training import accuracy, load, TASK, train, TrainConfig
@@ -47,10 +47,11 @@ def cmd_eval(args) -> int:
         'image_noise': args.image_noise,
         'text_noise': args.text_noise,
         'seed': args.seed,
+        'absent': args.absent,
         **accuracy(
             model,
             vocab,
-            load_split(args.split, args.cache),
+            load_split(args.split, args.cache, absent=args.absent),
             args.image_noise,
             args.text_noise,
             args.seed,
@@ -95,6 +96,11 @@ def register_cli(sub) -> None:
     e.add_argument(
         '--text-noise', type=ranged(int, low=0), default=0, metavar='K',
         help='insert K verbs, articles and foreign object names at one position',
+    )
+    e.add_argument(
+        '--absent', type=ranged(float, low=0.0, high=1.0), default=ABSENT, metavar='FRACTION',
+        help="share of the split's false statements that name an absent object (default: the "
+        "splits' mix; 0: every false statement plausible, the previous data)",
     )
     e.add_argument('--seed', type=int, default=0, help='seed of the noise')
     e.add_argument('--json', action='store_true', help='print exactly one JSON object')

@@ -18,7 +18,18 @@ What a statement means, exactly (the tests read scenes against it independently)
 - No object matches both X and Y: otherwise two such objects would make every relation true.
 - Every pair of an X object and a Y object is at least MARGIN pixels apart along the relation's
   axis, so no label hangs on a near-tie.
-- False statements are plausible: objects matching X and Y exist, the relation does not hold.
+- It is false when no object matches X, or none matches Y, or the relation fails for every pair.
+  X and Y are never nested ("a red circle" and "a red shape", or twice "a circle"): such a
+  statement could never be true, so its words alone would give the label away.
+- False statements come from the sources of ShapeWorld's own generator (its captioners' incorrect
+  modes, github.com/AlexKuhnle/ShapeWorld, as configured for the data of Andreas et al. 2017 that
+  the paper used): a true statement with its relation inverted or replaced ('relation': both
+  objects exist, the relation fails), or with its subject's or its reference's description
+  changed ('subject', 'reference': the shape, the colour or both replaced, for a description
+  naming both half of the time by values the image has) so that no object fits it. A fraction
+  `absent` of the false statements (ABSENT in the splits, 0 in the all-plausible version) is of
+  the last two kinds, SUBJECT of them 'subject'; each example keeps its reason ('true' or the
+  source).
 - Labels are balanced within every (description kinds, relation) stratum, so the text alone
   predicts nothing.
 
@@ -66,7 +77,16 @@ SHADE = (0.75, 1.0)  # each object's colour is scaled by a random shade in this 
 MARGIN = 4.0  # pixels: every compared pair of centres is at least this far apart on the axis
 SPLIT_SIZES = {'train': 9000, 'test': 500}
 SPLIT_SEEDS = {'train': 0, 'test': 1}  # the splits are drawn from different streams
-VERSION = 1  # part of the cache file name: bump it when generation changes
+VERSION = 3  # part of the cache file name: bump it when generation changes
+# The splits' mix of false statements: ShapeWorld's procedure for the data the paper used (its
+# existential captioner changes the subject in half of the false captions, its relation
+# captioner the relation, its direction or the reference in a sixth each), run on these scenes,
+# keeps 36% false by the relation, 49% naming an absent subject and 16% an absent reference
+# (docs/shapeworld.md): a third, a half and a sixth here
+ABSENT = 2 / 3  # share of false statements that name an absent object
+SUBJECT = 3 / 4  # share of those whose absent object is the subject
+REASONS = ('true', 'relation', 'subject', 'reference')  # why a statement has its label
+EXISTING = 0.5  # share of changed descriptions naming both that take values the image holds
 # object rows: shape index, colour index, box left x, box top y, box side; -1 rows pad to 5
 FIELDS = ('shape', 'colour', 'x0', 'y0', 'size')
 # inserted by the textual noise: verbs, articles and objects that are not ShapeWorld's
@@ -83,6 +103,7 @@ class ShapeWorldSet:
     statements: list[str]
     labels: np.ndarray
     objects: np.ndarray  # (N, 5, 5) int64, rows as FIELDS, -1 where an image has 4 objects
+    reasons: list[str]  # one of REASONS: 'true', or what makes the statement false
 
     def __len__(self) -> int:
         return len(self.statements)
@@ -95,6 +116,7 @@ class ShapeWorldSet:
             [self.statements[i] for i in index],
             self.labels[index],
             self.objects[index],
+            [self.reasons[i] for i in index],
         )
 
 
@@ -229,16 +251,73 @@ def truth(
     return bool((diff > 0).any())
 
 
-def absent_description(
-    objects: np.ndarray, kind: str, rng: np.random.Generator
-) -> tuple[int, int]:
-    """Draw a description of `kind` that no object of the scene fits."""
+def nested(a: tuple[int, int], b: tuple[int, int]) -> bool:
+    """Whether every object fitting one description fits the other ('a circle', 'a red circle')."""
+
+    def within(x, y):
+        return all(y[k] < 0 or y[k] == x[k] for k in range(2))
+
+    return within(a, b) or within(b, a)
+
+
+def reason(
+    objects: np.ndarray, subject: tuple[int, int], relation: str, reference: tuple[int, int]
+) -> str | None:
+    """
+    Return 'true' or why the statement is false (REASONS); None when it is no fair question.
+
+    'subject' / 'reference': no object fits that side (the other side fits one); 'relation':
+    both fit objects, the relation fails for every pair (truth); nested sides are not fair.
+    """
+    if nested(subject, reference):
+        return None
+    a, b = matches(objects, subject).any(), matches(objects, reference).any()
+    if a and b:
+        holds = truth(objects, subject, relation, reference)
+        return None if holds is None else 'true' if holds else 'relation'
+    return 'subject' if b else 'reference' if a else None
+
+
+def changed_description(
+    description: tuple[int, int], objects: np.ndarray, rng: np.random.Generator
+) -> tuple[int, int] | None:
+    """
+    Return the description with a named attribute replaced, ShapeWorld's incorrect type.
+
+    Naming shape and colour, the shape, the colour or both change (a third each, its captioner's
+    modes), with probability EXISTING to values the image's objects have (its "existing
+    attribute" mode, never for a description naming one attribute), else to any; each new value
+    differs from the old. None: no such value.
+    """
+    named = [k for k in range(2) if description[k] >= 0]
+    which = named if len(named) == 1 else [[0], [1], [0, 1]][rng.integers(3)]
+    existing = len(named) == 2 and rng.random() < EXISTING
+    new = list(description)
+    for k in which:
+        pool = objects[:, k] if existing else np.arange(len(SHAPES) if k == 0 else len(COLOURS))
+        pool = np.unique(pool[(pool >= 0) & (pool != description[k])])
+        if not len(pool):
+            return None
+        new[k] = int(rng.choice(pool))
+    return new[0], new[1]
+
+
+def _example(rng, kinds, relation, want: str):
+    """(scene objects, subject, reference) of a statement whose reason() is `want`."""
     while True:
-        description = describe(
-            np.array([rng.integers(len(SHAPES)), rng.integers(len(COLOURS))]), kind
-        )
-        if not matches(objects, description).any():
-            return description
+        objects = random_scene(rng)
+        for _ in range(20):
+            s, r = rng.choice(len(objects), size=2, replace=False)
+            sides = [describe(objects[s], kinds[0]), describe(objects[r], kinds[1])]
+            if want in ('subject', 'reference'):  # change a side of a true statement
+                if truth(objects, sides[0], relation, sides[1]) is not True:
+                    continue
+                side = REASONS.index(want) - 2
+                sides[side] = changed_description(sides[side], objects, rng)
+                if sides[side] is None:
+                    continue
+            if reason(objects, sides[0], relation, sides[1]) == want:
+                return objects, sides[0], sides[1]
 
 
 def generate(
@@ -246,17 +325,20 @@ def generate(
     seed: int = 0,
     name: str = 'shapeworld',
     descriptions: tuple = DESCRIPTIONS,
-    absent: float = 0.0,
+    absent: float = ABSENT,
 ) -> ShapeWorldSet:
     """
     N examples, half true, half false, in every (description kinds, relation) stratum.
 
-    Each example draws its stratum and label first, then scenes and object pairs until a
-    statement of that stratum has that label. `descriptions` are the kinds of naming drawn for
-    each side (('colour',): only "a red shape is above a green shape"). A fraction `absent` of
-    the false statements name, on one side drawn at random, an object the image does not hold
-    (the curriculum's start: checking which objects exist then predicts labels; the splits
-    keep 0, every false statement plausible).
+    Each example draws its stratum and label first, and a false one its reason (a fraction
+    `absent` 'subject' or 'reference', SUBJECT of them 'subject', the rest 'relation'), then
+    scenes and object
+    pairs until a statement of that stratum has that reason. `descriptions` are the kinds of
+    naming drawn for each side (('colour',): only "a red shape is above a green shape").
+    A false statement with an absent side is a true statement of the stratum with that side's
+    description changed (changed_description), as ShapeWorld's generator makes them; one false
+    by its relation is a true statement with its relation inverted, which is the same as two
+    objects for which the stated relation fails (no near-ties, see truth).
     """
     if not 0 <= absent <= 1:
         raise ValueError(f'absent is a fraction of the false statements, got {absent}')
@@ -264,38 +346,25 @@ def generate(
         raise ValueError(f'descriptions {descriptions} are not some of {DESCRIPTIONS}')
     rng = np.random.default_rng(seed)
     relations = list(RELATIONS)
-    images, statements, labels, rows = [], [], [], []
+    images, statements, labels, rows, reasons = [], [], [], [], []
     for i in range(n):
         label = bool(i % 2)  # exactly half true; strata are drawn independently of it
         kinds = tuple(descriptions[rng.integers(len(descriptions))] for _ in range(2))
         relation = relations[rng.integers(len(relations))]
-        found = None
+        want = 'true' if label else 'relation'
         if not label and absent and rng.random() < absent:
-            objects = random_scene(rng)
-            s, r = rng.choice(len(objects), size=2, replace=False)
-            sides = [describe(objects[s], kinds[0]), describe(objects[r], kinds[1])]
-            side = int(rng.integers(2))
-            while True:  # the named side fits no object; the other side fits only its own
-                sides[side] = absent_description(objects, kinds[side], rng)
-                if not (matches(objects, sides[0]) & matches(objects, sides[1])).any():
-                    break
-            found = objects, statement(sides[0], relation, sides[1])
-        while found is None:
-            objects = random_scene(rng)
-            for _ in range(20):
-                s, r = rng.choice(len(objects), size=2, replace=False)
-                subject, reference = describe(objects[s], kinds[0]), describe(objects[r], kinds[1])
-                if truth(objects, subject, relation, reference) == label:
-                    found = objects, statement(subject, relation, reference)
-                    break
-        objects, text = found
+            want = 'subject' if rng.random() < SUBJECT else 'reference'
+        objects, subject, reference = _example(rng, kinds, relation, want)
         images.append(render(objects, rng.uniform(*SHADE, size=len(objects))))
-        statements.append(text)
+        statements.append(statement(subject, relation, reference))
         labels.append(int(label))
+        reasons.append(want)
         padded = np.full((OBJECTS[1], len(FIELDS)), -1, dtype=np.int64)
         padded[: len(objects)] = objects
         rows.append(padded)
-    return ShapeWorldSet(name, np.stack(images), statements, np.array(labels), np.stack(rows))
+    return ShapeWorldSet(
+        name, np.stack(images), statements, np.array(labels), np.stack(rows), reasons
+    )
 
 
 # --- splits on disk -----------------------------------------------------------------------
@@ -313,14 +382,15 @@ def load_split(
     n: int | None = None,
     seed: int = 0,
     descriptions: tuple = DESCRIPTIONS,
-    absent: float = 0.0,
+    absent: float = ABSENT,
 ) -> ShapeWorldSet:
     """
     Return a split, generating it into the cache the first time.
 
     The file name holds the generator version, the split, its size, the seed, the kinds of
-    naming when not all three and the fraction `absent` when not 0, so a change of any of them
-    makes a new file rather than reading a stale one.
+    naming when not all three and the fraction `absent` (absent0.667 for the splits, absent0
+    for the all-plausible version), so a change of any of them makes a new file rather than
+    reading a stale one.
     """
     if split not in SPLIT_SIZES:
         raise ValueError(f'ShapeWorld has no split {split!r}; use one of {", ".join(SPLIT_SIZES)}')
@@ -328,7 +398,7 @@ def load_split(
     if n < 1:
         raise ValueError(f'ShapeWorld split size must be positive, got {n}')
     kinds = '' if tuple(descriptions) == DESCRIPTIONS else '-' + '-'.join(descriptions)
-    kinds += f'-absent{absent:g}' if absent else ''
+    kinds += f'-absent{absent:.3g}'
     name = f'shapeworld-{split}{kinds}'
     file_name = f'shapeworld-v{VERSION}-{split}{kinds}-{n}-seed{seed}.npz'
     path = Path(cache_dir or default_cache_dir()) / file_name
@@ -336,7 +406,8 @@ def load_split(
         try:
             with np.load(path) as f:
                 return ShapeWorldSet(
-                    name, f['images'], [str(s) for s in f['statements']], f['labels'], f['objects']
+                    name, f['images'], [str(s) for s in f['statements']], f['labels'],
+                    f['objects'], [str(s) for s in f['reasons']],
                 )
         except Exception as exc:  # numpy raises many types on a truncated or foreign file
             raise ValueError(
@@ -351,6 +422,7 @@ def load_split(
         statements=np.array(data.statements),
         labels=data.labels,
         objects=data.objects,
+        reasons=np.array(data.reasons),
     )
     tmp.replace(path)  # atomic: a parallel run never reads half a file
     return data
