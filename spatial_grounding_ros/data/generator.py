@@ -26,6 +26,7 @@ import numpy as np
 
 from .datasets import GroundingSet
 from ..core import world
+from ..core.checks import EXTREME_SIDES
 from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
 GRASS, PUDDLE = 0, 1
@@ -54,12 +55,7 @@ _STRAIGHT = {
 }
 _COMBINED = [(dr, dc) for dr in (-2, -1, 1, 2) for dc in (-2, -1, 1, 2) if 2 in (abs(dr), abs(dc))]
 # extreme -> (axis, sign): the object with the largest sign * coordinate on that axis
-_EXTREMES = {
-    'northernmost': (0, -1),
-    'southernmost': (0, 1),
-    'westernmost': (1, -1),
-    'easternmost': (1, 1),
-}
+_EXTREMES = {w: EXTREME_SIDES[w] for w in 'northernmost southernmost westernmost easternmost'.split()}
 # "the cell <side> the <extreme> <object>" (Janner's global phrasing)
 _SIDES = {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'to the left of', (0, 1): 'to the right of'}
 
