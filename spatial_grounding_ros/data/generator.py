@@ -55,7 +55,9 @@ _STRAIGHT = {
 }
 _COMBINED = [(dr, dc) for dr in (-2, -1, 1, 2) for dc in (-2, -1, 1, 2) if 2 in (abs(dr), abs(dc))]
 # extreme -> (axis, sign): the object with the largest sign * coordinate on that axis
-_EXTREMES = {w: EXTREME_SIDES[w] for w in 'northernmost southernmost westernmost easternmost'.split()}
+_EXTREMES = {
+    w: EXTREME_SIDES[w] for w in 'northernmost southernmost westernmost easternmost'.split()
+}
 # "the cell <side> the <extreme> <object>" (Janner's global phrasing)
 _SIDES = {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'to the left of', (0, 1): 'to the right of'}
 
