@@ -39,6 +39,8 @@ from ..core import topics
 from ..core.world import ACTIONS
 from ..training.env import observation_space
 
+NEXT_EPISODE_ATTEMPTS = 3  # requests of one reset(), each given a third of the timeout
+
 
 class GridWorldClient(Node):
     """
@@ -96,12 +98,13 @@ class GridWorldClient(Node):
         self.terminals.append(bool(msg.data))
         self.counts['terminated'] += 1
 
-    def wait_for(self, what: str, condition) -> None:
-        deadline = time.monotonic() + self.timeout
+    def wait_for(self, what: str, condition, timeout: float | None = None) -> None:
+        timeout = self.timeout if timeout is None else timeout
+        deadline = time.monotonic() + timeout
         while not condition():
             if time.monotonic() > deadline:
                 raise TimeoutError(
-                    f'no {what} from the gridworld node within {self.timeout:g} s '
+                    f'no {what} from the gridworld node within {timeout:g} s '
                     f'(is it running in namespace {self.get_namespace()!r}?)'
                 )
             rclpy.spin_once(self, timeout_sec=0.05)
@@ -120,12 +123,28 @@ class GridWorldClient(Node):
             )
         self.wait_for('next_episode service', lambda: self.next_client.service_is_ready())
         before = dict(self.counts)
-        future = self.next_client.call_async(Trigger.Request())
-        self.wait_for('next_episode response', future.done)
-        # a new episode republishes map, instruction and the start pose
+        episode_topics = ('map', 'instruction', 'pose')  # a new episode republishes these
+
+        def heard_back():
+            return future.done() or any(self.counts[k] > before[k] for k in episode_topics)
+
+        # The episode's messages, not only the service's answer, say that it started: Fast DDS
+        # can report a service ready before the server has matched the client's response
+        # reader, and then the answer is lost although the episode began. A request that gets
+        # neither an answer nor a message is sent again.
+        for attempt in range(NEXT_EPISODE_ATTEMPTS):
+            future = self.next_client.call_async(Trigger.Request())
+            try:
+                self.wait_for(
+                    'answer to next_episode', heard_back, self.timeout / NEXT_EPISODE_ATTEMPTS
+                )
+                break
+            except TimeoutError:
+                if attempt + 1 == NEXT_EPISODE_ATTEMPTS:
+                    raise
+                self.get_logger().warning('next_episode unanswered: sending it again')
         self.wait_for(
-            'episode start',
-            lambda: all(self.counts[k] > before[k] for k in ('map', 'instruction', 'pose')),
+            'episode start', lambda: all(self.counts[k] > before[k] for k in episode_topics)
         )
         self.steps, self.done = 0, False
         return self.observation(), {'steps': 0}
