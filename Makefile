@@ -45,7 +45,7 @@ test-fast: $(INTERFACES)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q -m fast test
 
 # Every row of the value-map table, trained and evaluated one after another on 2 threads
-# (training is deterministic there: a row's checkpoint is the shipped one, bit for bit):
+# (training is deterministic there: the same code gives the same checkpoint, bit for bit):
 # results/value_map.json, results/value_map.md, the shipped checkpoints
 reproduce: $(INTERFACES)
 	$(VENV)/bin/spatial-grounding reproduce $(DATA_ARG) --out results

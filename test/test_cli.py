@@ -181,7 +181,7 @@ def test_train_options_are_the_config_fields():
     base = ['train', '--task', 'pw', '--model', 't-cnn']
     args = build_parser().parse_args(base)
     assert given_options(TrainConfig, args) == {}
-    assert TrainConfig().for_task('pw') == TrainConfig(
+    assert TrainConfig().for_task('pw', 't-rnet-attn') == TrainConfig(
         epochs=TASKS['pw'].epochs,
         synthetic=TASKS['pw'].synthetic,
         world_instructions=True,
@@ -191,13 +191,17 @@ def test_train_options_are_the_config_fields():
         distractors=TASKS['pw'].distractors,
         text_noise=TASKS['pw'].text_noise,
     )
+    # the paper's baselines have a recipe of their own: MSE alone, no distractor objects
+    baseline = TrainConfig().for_task('pw-local', 't-cnn')
+    assert (baseline.goal_weight, baseline.distractors) == (0.0, 0)
+    assert baseline.epochs == TASKS['pw-local'].recipes['t-cnn']['epochs'] == 70
     args = build_parser().parse_args(
         base + ['--no-mirrors', '--epochs', '7', '--batch-size', '8', '--select', 'mse']
     )
     given = given_options(TrainConfig, args)
     assert given == {'mirrors': False, 'epochs': 7, 'batch_size': 8, 'select': 'mse'}
     # a value given wins over the task's
-    assert TrainConfig(**given).for_task('pw').epochs == 7
+    assert TrainConfig(**given).for_task('pw', 't-cnn').epochs == 7
     assert all(f.metadata['help'] for f in fields(TrainConfig))
     with pytest.raises(ValueError, match='batch_size must be at least 1, got 0'):
         TrainConfig(batch_size=0)

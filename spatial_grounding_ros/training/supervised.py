@@ -127,15 +127,15 @@ class TrainConfig:
     def __post_init__(self):
         check(self)
 
-    def for_task(self, task: tasks.Task | str) -> 'TrainConfig':
-        """Return this config with every field left at None set to `task`'s value."""
-        settings = task if isinstance(task, tasks.Task) else tasks.task(task)
+    def for_task(self, task: str, model: str) -> 'TrainConfig':
+        """Return this config with every field left at None set to `model`'s value on `task`."""
+        recipe = tasks.recipe(task, model)
         return replace(
             self,
             **{
-                f.name: getattr(settings, f.name)
+                f.name: recipe[f.name]
                 for f in fields(self)
-                if getattr(self, f.name) is None and hasattr(settings, f.name)
+                if getattr(self, f.name) is None and f.name in recipe
             },
         )
 
@@ -230,7 +230,7 @@ def task_training_config(
                 f'{model_name} has no distractor kinds; train it with --distractors 0'
             )
         tc = replace(tc, distractors=0)
-    tc = tc.for_task(task)
+    tc = tc.for_task(task.name, model_name)
     if tc.synthetic and task.generator_mode is None:
         raise ValueError(
             f'--synthetic adds generated PuddleWorld worlds; task {task.name} is not PuddleWorld'
