@@ -34,6 +34,7 @@ from .core.units import offsets
 from .core.wording import (
     canonical,
     cell_for_fixed_target,
+    count_first,
     drop_unknown,
     reworded,
     tidy,
@@ -254,9 +255,8 @@ class Grounder:
         """
         self.check(grid, instruction)
         grid = np.asarray(grid, dtype=np.int64)
-        distances = offsets(
-            unpossessed(instruction), self.cell_size if cell_size is None else cell_size
-        )
+        spoken = count_first(unpossessed(instruction))  # the landmark's side, a count after it
+        distances = offsets(spoken, self.cell_size if cell_size is None else cell_size)
         words = tokenize(distances.text)
         if self.translation is not None:
             translated = self.translation(grid, distances.model_text)

@@ -12,6 +12,7 @@ from spatial_grounding_ros.core.text import tokenize
 from spatial_grounding_ros.core.wording import (
     canonical,
     cell_for_fixed_target,
+    count_first,
     drop_unknown,
     tidy,
     unpossessed,
@@ -138,3 +139,19 @@ def test_a_side_said_as_the_landmarks_own_is_the_side_of_it():
     )
     assert unpossessed("the plant's southern side") == 'the south of the plant'
     assert unpossessed("the fridge's door") == "the fridge's door"  # no side: as it was
+
+
+def test_a_count_said_after_its_landmark_is_said_before_it():
+    assert count_first('go directly north of the trash can by two cells') == (
+        'go two cells directly north of the trash can'
+    )
+    assert count_first('stop left of the door by 1.5 m') == 'stop 1.5 m left of the door'
+    assert count_first('go by the door') == 'go by the door'  # no count: as it was
+    assert count_first('go to the left of the desk') == 'go to the left of the desk'
+
+
+def test_a_count_after_the_landmark_moves_the_goal_by_it(grounder):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[6, 4] = 2  # a star
+    assert grounder.ground(grid, 'go north of the star by three squares').goal == (3, 4)
+    assert grounder.ground(grid, 'go north of the star by one square').goal == (5, 4)

@@ -187,6 +187,20 @@ def unpossessed(text: str) -> str:
     return _POSSESSED_SIDE.sub(r'the \2 of the \1', text.lower())
 
 
+# "north of the bin by two cells" -> "two cells north of the bin": the count where it is read
+_COUNT_AFTER = re.compile(
+    r'\b((?:(?:directly|right|just) )?(?:above|below|under|over|beneath|underneath|'
+    r'(?:to the )?(?:left|right|north|south|east|west) of))'
+    r"((?: [a-z0-9'_-]+)+?) by ([0-9]+(?:\.[0-9]+)?|one|two|three|four|five)"
+    r'((?: (?:cells?|squares?|steps?|spaces?|tiles?|spots?|m|meters?|metres?))?)\b'
+)
+
+
+def count_first(text: str) -> str:
+    """Return the text with a count said after its landmark ("by two cells") said before it."""
+    return _COUNT_AFTER.sub(r'\3\4 \1\2', text.lower())
+
+
 def drop_unknown(words: list[str], known) -> list[str]:
     """Return the words the model knows (an instruction of none keeps its words)."""
     kept = [w for w in words if w in known]
