@@ -37,6 +37,7 @@ from .core.wording import (
     count_first,
     drop_unknown,
     reworded,
+    side_of_it,
     tidy,
     unpossessed,
     wording_words,
@@ -313,12 +314,15 @@ class Grounder:
         Other wordings of a relation, a unit or a verb become the model's, filler goes, and
         so does every word the model never saw, so that none can move the goal. The model's
         own landmark names are never reworded, but a target whose row and column two
-        landmarks fix is said as "cell" (wording.cell_for_fixed_target), and a verb past the
-        opening or a repeated article is left out (wording.tidy).
+        landmarks fix is said as "cell" (wording.cell_for_fixed_target), a side of "its"
+        landmark is said of it (wording.side_of_it), and a verb past the opening or a repeated
+        article is left out (wording.tidy).
         """
         words = tokenize(text)
         names = [i for i, w in enumerate(words) if w in self.model_entities.names]
         words = tidy(drop_unknown(canonical(words, names), self.vocab.index))
+        names = [i for i, w in enumerate(words) if w in self.model_entities.names]
+        words = side_of_it(words, names)
         names = [i for i, w in enumerate(words) if w in self.model_entities.names]
         return ' '.join(cell_for_fixed_target(words, names))
 

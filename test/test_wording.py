@@ -14,6 +14,7 @@ from spatial_grounding_ros.core.wording import (
     cell_for_fixed_target,
     count_first,
     drop_unknown,
+    side_of_it,
     tidy,
     unpossessed,
 )
@@ -155,3 +156,20 @@ def test_a_count_after_the_landmark_moves_the_goal_by_it(grounder):
     grid[6, 4] = 2  # a star
     assert grounder.ground(grid, 'go north of the star by three squares').goal == (3, 4)
     assert grounder.ground(grid, 'go north of the star by one square').goal == (5, 4)
+
+
+def test_a_side_of_its_landmark_is_said_of_the_landmark():
+    words = 'reach the star and one to its left'.split()
+    assert side_of_it(words, [2]) == 'reach one to the left of the star'.split()
+    words = 'reach closest to the star on its bottom side'.split()
+    assert side_of_it(words, [4]) == 'reach below the star'.split()
+    # two landmarks: "its" could be either, the words stay
+    words = 'reach the star and the circle to its left'.split()
+    assert side_of_it(words, [2, 5]) == words
+
+
+def test_a_side_of_it_moves_the_goal_to_that_side(grounder):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[6, 4] = 2  # a star
+    assert grounder.ground(grid, 'go to the star and stop two cells to its left').goal == (6, 2)
+    assert grounder.ground(grid, 'find the star and wait on its north side').goal == (5, 4)

@@ -250,3 +250,31 @@ def cell_for_fixed_target(words: list[str], names: Iterable[int]) -> list[str]:
     ):
         return [*words[:first], 'cell', *words[first + 1:]]
     return words
+
+
+# a side said of "it": the model's words for it, with and without a count before them
+_ITS_SIDE = {
+    'left': 'to the left of', 'west': 'to the left of', 'right': 'to the right of',
+    'east': 'to the right of', 'top': 'above', 'north': 'above', 'bottom': 'below',
+    'south': 'below',
+}  # fmt: skip
+
+
+def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
+    """
+    Return the words with a side said of "its" landmark said of the landmark.
+
+    "reach the star and one to its left" and "reach closest to the star on its left side" are
+    "reach one to the left of the star" and "reach to the left of the star": with one landmark
+    named, "its" is that landmark, and its side replaces what the words said before it.
+    """
+    names = list(names)
+    its = [i for i, w in enumerate(words[:-1]) if w == 'its' and words[i + 1] in _ITS_SIDE]
+    if len(names) != 1 or len(its) != 1 or its[0] < names[0]:
+        return words
+    name, at = names[0], its[0]
+    count = [w for w in words[name + 1:at] if w in COUNTS][:1]
+    rest = words[at + 2:]
+    rest = rest[1:] if rest[:1] == ['side'] else rest
+    opening = words[:1] if words[0] in OPENING_VERBS else []
+    return [*opening, *count, *_ITS_SIDE[words[at + 1]].split(), 'the', words[name], *rest]
