@@ -147,6 +147,7 @@ def test_a_count_said_after_its_landmark_is_said_before_it():
         'go two cells directly north of the trash can'
     )
     assert count_first('stop left of the door by 1.5 m') == 'stop 1.5 m left of the door'
+    assert count_first('go above the forklift, two cells') == 'go two cells above the forklift'
     assert count_first('go by the door') == 'go by the door'  # no count: as it was
     assert count_first('go to the left of the desk') == 'go to the left of the desk'
 
@@ -163,6 +164,14 @@ def test_a_side_of_its_landmark_is_said_of_the_landmark():
     assert side_of_it(words, [2]) == 'reach one to the left of the star'.split()
     words = 'reach closest to the star on its bottom side'.split()
     assert side_of_it(words, [4]) == 'reach below the star'.split()
+    words = 'the blue star one to the left'.split()
+    assert side_of_it(words, [2]) == 'one to the left of the blue star'.split()
+    # which star, or more than a side of it: the words stay
+    for said in (
+        'reach the star on the right',
+        'reach the cell below the star then two to the left',
+    ):
+        assert side_of_it(said.split(), [said.split().index('star')]) == said.split()
     # two landmarks: "its" could be either, the words stay
     words = 'reach the star and the circle to its left'.split()
     assert side_of_it(words, [2, 5]) == words

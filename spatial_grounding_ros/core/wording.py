@@ -187,11 +187,12 @@ def unpossessed(text: str) -> str:
     return _POSSESSED_SIDE.sub(r'the \2 of the \1', text.lower())
 
 
-# "north of the bin by two cells" -> "two cells north of the bin": the count where it is read
+# "north of the bin by two cells" (or ", two cells") -> "two cells north of the bin": the count
+# where it is read
 _COUNT_AFTER = re.compile(
     r'\b((?:(?:directly|right|just) )?(?:above|below|under|over|beneath|underneath|'
     r'(?:to the )?(?:left|right|north|south|east|west) of))'
-    r"((?: [a-z0-9'_-]+)+?) by ([0-9]+(?:\.[0-9]+)?|one|two|three|four|five)"
+    r"((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|one|two|three|four|five)"
     r'((?: (?:cells?|squares?|steps?|spaces?|tiles?|spots?|m|meters?|metres?))?)\b'
 )
 
@@ -266,15 +267,36 @@ def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
 
     "reach the star and one to its left" and "reach closest to the star on its left side" are
     "reach one to the left of the star" and "reach to the left of the star": with one landmark
-    named, "its" is that landmark, and its side replaces what the words said before it.
+    named, "its" is that landmark, and its side replaces what the words said before it. A
+    count before "the <side>" with nothing after it is a side of the landmark too when the
+    landmark is the request's first words ("the blue star, one to the left"); without a count,
+    "the star on the right" says which star, and stays; "the cell below the star then two to
+    the left" says more than a side of it, and stays.
     """
     names = list(names)
-    its = [i for i, w in enumerate(words[:-1]) if w == 'its' and words[i + 1] in _ITS_SIDE]
-    if len(names) != 1 or len(its) != 1 or its[0] < names[0]:
+    if len(names) != 1:
         return words
-    name, at = names[0], its[0]
+    name = names[0]
+    sides = [
+        i
+        for i in range(name + 2, len(words))
+        if words[i] in _ITS_SIDE
+        and words[i - 1] in ('its', 'the')
+        and words[i + 1:i + 2] != ['of']
+    ]
+    if len(sides) != 1:
+        return words
+    at = sides[0]
     count = [w for w in words[name + 1:at] if w in COUNTS][:1]
-    rest = words[at + 2:]
-    rest = rest[1:] if rest[:1] == ['side'] else rest
     opening = words[:1] if words[0] in OPENING_VERBS else []
-    return [*opening, *count, *_ITS_SIDE[words[at + 1]].split(), 'the', words[name], *rest]
+    # the landmark with the words that say which: "the blue star"
+    start = max([i + 1 for i in range(len(opening), name) if words[i] in ARTICLES], default=name)
+    before = words[len(opening):start]
+    if words[at - 1] == 'the' and (not count or set(before) - ARTICLES):
+        return words
+    landmark = words[start:name + 1]
+    if set(landmark[:-1]) & (CELL_AFTER | {'cell'}):
+        landmark = landmark[-1:]
+    rest = words[at + 1:]
+    rest = rest[1:] if rest[:1] == ['side'] else rest
+    return [*opening, *count, *_ITS_SIDE[words[at]].split(), 'the', *landmark, *rest]
