@@ -56,6 +56,7 @@ REASONS = (
     'unknown-landmark',
     'off-map',
     'ambiguous',
+    'unsupported',
     'goal-on-obstacle',
     'low-confidence',
 )

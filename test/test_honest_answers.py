@@ -120,6 +120,21 @@ def test_in_front_of_and_behind_name_no_side_on_a_map():
     assert office.ground(grid, 'go one cell below the fridge').reason is None
 
 
+def test_nearness_alone_names_no_cell_and_furthest_from_is_not_read_as_closest():
+    table, grid = office_map()
+    office = Grounder.from_checkpoint(entities=OFFICE)
+    # the model read "next to the fridge" as the fridge's own cell
+    g = office.ground(grid, 'go next to the fridge')
+    assert (g.goal, g.reason) == (None, 'ambiguous: no side of the fridge is named')
+    assert office.ground(grid, 'go to the cell beside the fridge').reason_code == 'ambiguous'
+    # a side, a count or a kind to pick says which cell
+    assert office.ground(grid, 'go next to the fridge on its left side').goal == (7, 7)
+    assert office.ground(grid, 'go to the chair nearest the fridge').goal == (8, 1)
+    # the model learned closest to, and read "furthest from" as it
+    g = office.ground(grid, 'go to the chair furthest from the fridge')
+    assert (g.goal, g.reason_code) == (None, 'unsupported')
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

@@ -166,6 +166,7 @@ def test_a_side_of_its_landmark_is_said_of_the_landmark():
     assert side_of_it(words, [4]) == 'reach below the star'.split()
     words = 'the blue star one to the left'.split()
     assert side_of_it(words, [2]) == 'one to the left of the blue star'.split()
+    assert side_of_it('the star two down'.split(), [1]) == 'two below the star'.split()
     # which star, or more than a side of it: the words stay
     for said in (
         'reach the star on the right',

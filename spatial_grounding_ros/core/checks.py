@@ -90,6 +90,11 @@ QUALIFIERS = EXTREME_WORDS | frozenset(
 )
 # relations a person faces a landmark with, which a map seen from above has no side for
 SIDELESS = ('in front of', 'behind', 'in back of')
+# nearness words: with no kind before them to pick one of, no side and no count, every cell
+# around the landmark fits ("go next to the table", read as "reach closest to the table")
+NEARNESS = frozenset('closest nearest near beside'.split())
+# relations the model never learned, which its words would read as their opposite
+UNLEARNED = ('furthest from', 'farthest from', 'furthest away from', 'farthest away from')
 # words before an extreme that say it is one of several that pick the landmark together
 # ("the left topmost horse", "topmost and eastmost rock", "the higher of westernmost houses",
 # "the two topmost trees")
@@ -298,6 +303,21 @@ def said(table: EntityTable, kind: int) -> str:
     return table.names[kind].replace('_', ' ')
 
 
+def nearness_alone(words: list[str], mentions: list[Mention]) -> bool:
+    """
+    Say whether nearness to one landmark is all the words say of the goal.
+
+    "go next to the table": any cell around it fits. "The rock closest to the tree" picks a
+    rock, "the cell next to the triangle on the right" and "two cells near the tree" say which
+    cell.
+    """
+    if len(mentions) != 1:
+        return False
+    if not NEARNESS & set(words[:mentions[0].start]):
+        return False
+    return not any(w in DIRECTIONS or w in NUMBERS for w in words)
+
+
 def structural_reason(
     table: EntityTable,
     grid: np.ndarray,
@@ -314,9 +334,15 @@ def structural_reason(
     word = unknown_landmark(words, known, mentions)
     if word is not None:
         return f'unknown-landmark: {word}'
-    sideless = next((w for w in SIDELESS if f' {w} ' in f' {" ".join(words)} '), None)
+    said_words = f' {" ".join(words)} '
+    sideless = next((w for w in SIDELESS if f' {w} ' in said_words), None)
     if mentions and sideless:
         return f'ambiguous: "{sideless}" names no side on a map'
+    unlearned = next((w for w in UNLEARNED if f' {w} ' in said_words), None)
+    if mentions and unlearned:
+        return f'unsupported: "{unlearned}" is no relation the model learned'
+    if nearness_alone(words, mentions):
+        return f'ambiguous: no side of the {said(table, mentions[0].kind)} is named'
     # the rest reads the words around a name: an unknown word there says nothing
     words, mentions = without_unknown(words, known, mentions)
     if off_map(grid, words, mentions):

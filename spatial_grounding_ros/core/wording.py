@@ -257,7 +257,7 @@ def cell_for_fixed_target(words: list[str], names: Iterable[int]) -> list[str]:
 _ITS_SIDE = {
     'left': 'to the left of', 'west': 'to the left of', 'right': 'to the right of',
     'east': 'to the right of', 'top': 'above', 'north': 'above', 'bottom': 'below',
-    'south': 'below',
+    'south': 'below', 'up': 'above', 'above': 'above', 'down': 'below', 'below': 'below',
 }  # fmt: skip
 
 
@@ -268,10 +268,10 @@ def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
     "reach the star and one to its left" and "reach closest to the star on its left side" are
     "reach one to the left of the star" and "reach to the left of the star": with one landmark
     named, "its" is that landmark, and its side replaces what the words said before it. A
-    count before "the <side>" with nothing after it is a side of the landmark too when the
-    landmark is the request's first words ("the blue star, one to the left"); without a count,
-    "the star on the right" says which star, and stays; "the cell below the star then two to
-    the left" says more than a side of it, and stays.
+    count and a side with nothing after them are a side of the landmark too when the landmark
+    is the request's first words ("the blue star, one to the left", "the sink, two down");
+    without a count, "the star on the right" says which star, and stays; "the cell below the
+    star then two to the left" says more than a side of it, and stays.
     """
     names = list(names)
     if len(names) != 1:
@@ -281,7 +281,7 @@ def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
         i
         for i in range(name + 2, len(words))
         if words[i] in _ITS_SIDE
-        and words[i - 1] in ('its', 'the')
+        and (words[i - 1] in ('its', 'the') or words[i - 1] in COUNTS)
         and words[i + 1:i + 2] != ['of']
     ]
     if len(sides) != 1:
@@ -292,7 +292,7 @@ def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
     # the landmark with the words that say which: "the blue star"
     start = max([i + 1 for i in range(len(opening), name) if words[i] in ARTICLES], default=name)
     before = words[len(opening):start]
-    if words[at - 1] == 'the' and (not count or set(before) - ARTICLES):
+    if words[at - 1] != 'its' and (not count or set(before) - ARTICLES):
         return words
     landmark = words[start:name + 1]
     if set(landmark[:-1]) & (CELL_AFTER | {'cell'}):
