@@ -133,6 +133,8 @@ def test_nearness_alone_names_no_cell_and_furthest_from_is_not_read_as_closest()
     # the model learned closest to, and read "furthest from" as it
     g = office.ground(grid, 'go to the chair furthest from the fridge')
     assert (g.goal, g.reason_code) == (None, 'unsupported')
+    said = 'go to the cell in the same row as the sofa and the same column as the fridge'
+    assert office.ground(grid, said).reason_code == 'unsupported'
 
 
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():

@@ -93,8 +93,12 @@ SIDELESS = ('in front of', 'behind', 'in back of')
 # nearness words: with no kind before them to pick one of, no side and no count, every cell
 # around the landmark fits ("go next to the table", read as "reach closest to the table")
 NEARNESS = frozenset('closest nearest near beside'.split())
-# relations the model never learned, which its words would read as their opposite
-UNLEARNED = ('furthest from', 'farthest from', 'furthest away from', 'farthest away from')
+# relations the model never learned: it would read "furthest from" as closest to, and a row
+# or column shared with a landmark as a cell beside it
+UNLEARNED = (
+    'furthest from', 'farthest from', 'furthest away from', 'farthest away from',
+    'same row as', 'same column as',
+)  # fmt: skip
 # words before an extreme that say it is one of several that pick the landmark together
 # ("the left topmost horse", "topmost and eastmost rock", "the higher of westernmost houses",
 # "the two topmost trees")
