@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.checks import said
 from ..grounder import Grounder, Grounding
 from ..training.options import ranged
 
@@ -76,8 +77,10 @@ def draw(grid: np.ndarray, grounder: Grounder, g: Grounding, path: str | Path) -
     fig, (ax_map, ax_val) = plt.subplots(1, 2, figsize=(10, 5))
     ax_map.imshow(np.isin(grid, table.obstacles), cmap='Greys', vmin=0, vmax=1.5)
     for (r, c), kind in np.ndenumerate(grid):
-        if kind != 0 and kind not in table.obstacles:
-            ax_map.text(c, r, table.names[kind][:6], ha='center', va='center', fontsize=7)
+        if kind != table.free_kind and kind not in table.obstacles:
+            # a dot on the landmark's cell, its whole name under it
+            ax_map.plot(c, r, 's', color='tab:blue', ms=5)
+            ax_map.text(c, r + 0.3, said(table, kind), ha='center', va='top', fontsize=7)
     ax_val.imshow(g.values, cmap='viridis')
     for ax in (ax_map, ax_val):
         for (r, c), _ in g.alternatives:
