@@ -167,3 +167,56 @@ def test_families_hit_on_64x64_worlds(grounder):
         rates[family] = float(np.mean(hits))
     low = {f: rate for f, rate in rates.items() if rate < FLOOR_64[f]}
     assert not low, f'families under their floor at 64x64: {low} (all: {rates})'
+
+
+def worlds_with_an_object_beside_the_goal(n: int, steps: int, word: str, seed: int):
+    """
+    Yield (grid, instruction, goal) with an object beside the goal.
+
+    "reach cell <steps> <word> <landmark>" on a 10x10 map of two objects, the second beside
+    the goal across the offset's line.
+
+    The suite's worlds seldom put an object there, and a retrained default can miss it where
+    the suite's families do not move (the test below).
+    """
+    rng = np.random.default_rng(seed)
+    kinds = [k for k in range(len(PUDDLEWORLD.names)) if k not in (0, *PUDDLEWORLD.obstacles)]
+    dr, dc = DIRECTION_STEPS[word]
+    made = 0
+    while made < n:
+        grid = np.zeros((10, 10), dtype=np.int64)
+        first, second = rng.choice(kinds, 2, replace=False)
+        r, c = (int(x) for x in rng.integers(0, 10, 2))
+        goal = (r + steps * dr, c + steps * dc)
+        beside = [(goal[0] + dc, goal[1] + dr), (goal[0] - dc, goal[1] - dr)][rng.integers(2)]
+        if not all(0 <= x < 10 for x in (*goal, *beside)):
+            continue
+        grid[r, c], grid[beside] = first, second
+        made += 1
+        name = PUDDLEWORLD.names[first]
+        yield grid, f'reach cell {NUMBER_WORDS[steps]} {word} {name}', goal
+
+
+DIRECTION_STEPS = {'below': (1, 0), 'above': (-1, 0), 'to the left of': (0, -1),
+                   'to the right of': (0, 1)}  # fmt: skip
+NUMBER_WORDS = {1: 'one', 2: 'two', 3: 'three'}
+
+
+# 80 worlds for each direction and count of cells, 960 in all. The shipped default hits 0.983
+# of them (its weakest sets: three to the right 0.90, two above 0.94); the default retrained at
+# dfdfb79 0.956 (three to the left 0.81, three to the right 0.84, two below 0.89). The floor
+# sits five binomial standard deviations (over 960 worlds) under the shipped rate.
+def test_an_object_beside_the_goal_does_not_move_it(grounder):
+    rates = {
+        (steps, word): np.mean(
+            [
+                grounder.ground(grid, text).goal == goal
+                for grid, text, goal in worlds_with_an_object_beside_the_goal(
+                    80, steps, word, seed=steps
+                )
+            ]
+        )
+        for word in DIRECTION_STEPS
+        for steps in NUMBER_WORDS
+    }
+    assert np.mean(list(rates.values())) >= 0.96, rates
