@@ -338,11 +338,11 @@ def structural_reason(
     word = unknown_landmark(words, known, mentions)
     if word is not None:
         return f'unknown-landmark: {word}'
-    said_words = f' {" ".join(words)} '
-    sideless = next((w for w in SIDELESS if f' {w} ' in said_words), None)
+    text = f' {" ".join(words)} '
+    sideless = next((w for w in SIDELESS if f' {w} ' in text), None)
     if mentions and sideless:
         return f'ambiguous: "{sideless}" names no side on a map'
-    unlearned = next((w for w in UNLEARNED if f' {w} ' in said_words), None)
+    unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
     if mentions and unlearned:
         return f'unsupported: "{unlearned}" is no relation the model learned'
     if nearness_alone(words, mentions):

@@ -30,9 +30,9 @@ COUNT_WORDS = {n: w for w, n in _NUMBER_WORDS.items() if n <= LEARNED_COUNT}
 _AMOUNT = r'(?P<n>\d+(?:[.,]\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + ')'
 _METRES = {'m': 1.0, 'metre': 1.0, 'meter': 1.0, 'cm': 0.01, 'centimetre': 0.01,
            'centimeter': 0.01}  # fmt: skip
-_METRIC = re.compile(
-    rf'\b{_AMOUNT}\s*(?P<unit>centimetres?|centimeters?|cm|metres?|meters?|m)\b', re.IGNORECASE
-)
+# a unit of length after an amount (wording.count_first reads it too)
+METRIC_UNIT = r'centimetres?|centimeters?|cm|metres?|meters?|m'
+_METRIC = re.compile(rf'\b{_AMOUNT}\s*(?P<unit>{METRIC_UNIT})\b', re.IGNORECASE)
 _UNIT_WORD = r'(?:\s+(?:cells?|squares?|steps?|spaces?|tiles?|spots?))?'
 # a count followed, after an optional unit, by the direction it goes
 _COUNT = re.compile(

@@ -24,9 +24,10 @@ from dataclasses import replace
 import re
 from typing import Iterable
 
-from .checks import DIRECTIONS, offset_before
+from .checks import DIRECTIONS, NUMBERS, offset_before
 from .lexicon import Mention
 from .text import tokenize
+from .units import METRIC_UNIT
 
 # canonical words -> the other wordings of them (each a phrase of one or more words)
 PHRASES = {
@@ -188,12 +189,13 @@ def unpossessed(text: str) -> str:
 
 
 # "north of the bin by two cells" (or ", two cells") -> "two cells north of the bin": the count
-# where it is read
+# where it is read; its unit a cell's (UNITS) or a length's (units.METRIC_UNIT)
+_NUMBER_WORDS = '|'.join(w for w in NUMBERS if w.isalpha())
 _COUNT_AFTER = re.compile(
     r'\b((?:(?:directly|right|just) )?(?:above|below|under|over|beneath|underneath|'
     r'(?:to the )?(?:left|right|north|south|east|west) of))'
-    r"((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|one|two|three|four|five)"
-    r'((?: (?:cells?|squares?|steps?|spaces?|tiles?|spots?|m|meters?|metres?))?)\b'
+    rf"((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|{_NUMBER_WORDS})"
+    rf"((?: (?:{'|'.join(sorted(UNITS, key=len, reverse=True))}|{METRIC_UNIT}))?)\b"
 )
 
 
@@ -253,12 +255,11 @@ def cell_for_fixed_target(words: list[str], names: Iterable[int]) -> list[str]:
     return words
 
 
-# a side said of "it": the model's words for it, with and without a count before them
-_ITS_SIDE = {
-    'left': 'to the left of', 'west': 'to the left of', 'right': 'to the right of',
-    'east': 'to the right of', 'top': 'above', 'north': 'above', 'bottom': 'below',
-    'south': 'below', 'up': 'above', 'above': 'above', 'down': 'below', 'below': 'below',
+# a side said of "it" (the side words of checks.DIRECTIONS): the model's words for it
+_STEP_WORDING = {
+    (-1, 0): 'above', (1, 0): 'below', (0, -1): 'to the left of', (0, 1): 'to the right of',
 }  # fmt: skip
+_ITS_SIDE = {w: _STEP_WORDING[step] for w, step in DIRECTIONS.items() if step in _STEP_WORDING}
 
 
 def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
