@@ -172,22 +172,6 @@ TASKS = {
 RL_TASKS = tuple(name for name, t in TASKS.items() if t.rl_episodes)
 
 
-def recipe(name: str, model: str) -> dict:
-    """Return the TrainConfig fields `model` trains with on task `name`: the task's, its own."""
-    t = task(name)
-    return {
-        'epochs': t.epochs,
-        'synthetic': t.synthetic,
-        'world_instructions': t.world_instructions,
-        'mirrors': t.mirrors,
-        'attention_warmup': t.attention_warmup,
-        'goal_weight': t.goal_weight,
-        'distractors': t.distractors,
-        'text_noise': t.text_noise,
-        **t.recipes.get(model, {}),
-    }
-
-
 def task(name: str) -> Task:
     """Return the task called `name`, or raise ValueError listing the tasks."""
     if name not in TASKS:

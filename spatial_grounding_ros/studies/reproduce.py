@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from .results import code_version, merge_rows
-from ..core.tasks import recipe, RL_TASKS, TASKS
+from ..core.tasks import RL_TASKS, TASKS
 from ..data.datasets import load_task
 from ..data.renaming import NAMINGS
 from ..models.checkpoints import load_checkpoint, PACKAGED_DIR
@@ -119,7 +119,8 @@ def reproduce_value_maps(
     for task in tasks:
         test = load_task(task, 'test', data_dir)
         for model_name in models:
-            epochs = max(1, int(recipe(task, model_name)['epochs'] * epochs_scale))
+            epochs = TrainConfig().for_task(task, model_name).epochs
+            epochs = max(1, int(epochs * epochs_scale))
             tc = TrainConfig(epochs=epochs, threads=threads)
             path, summary = train_supervised(task, model_name, data_dir, ckpt_dir, tc)
             if path.stem == DEFAULT_CHECKPOINT:

@@ -129,13 +129,14 @@ class TrainConfig:
 
     def for_task(self, task: str, model: str) -> 'TrainConfig':
         """Return this config with every field left at None set to `model`'s value on `task`."""
-        recipe = tasks.recipe(task, model)
+        settings = tasks.task(task)
+        own = settings.recipes.get(model, {})  # the model's fields over the task's
         return replace(
             self,
             **{
-                f.name: recipe[f.name]
+                f.name: own.get(f.name, getattr(settings, f.name))
                 for f in fields(self)
-                if getattr(self, f.name) is None and f.name in recipe
+                if getattr(self, f.name) is None and (f.name in own or hasattr(settings, f.name))
             },
         )
 
