@@ -141,6 +141,30 @@ def test_every_family_names_the_goal_an_independent_reading_gives(size):
     assert again.instructions == data.instructions
 
 
+def occupied_beside(grid, goal) -> bool:
+    r, c = goal
+    return any(
+        0 <= r + dr < grid.shape[0] and 0 <= c + dc < grid.shape[1] and grid[r + dr, c + dc] > 1
+        for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0))
+    )
+
+
+def test_the_defaults_mix_puts_objects_beside_offset_goals_without_moving_them():
+    """BESIDE_GOAL: more offset goals with an object beside them, each still the one named."""
+    rates = {}
+    for mode in ('mixed', 'training'):
+        data = generator.generate(600, seed=7, mode=mode)
+        local = [
+            (grid, text, tuple(goal))
+            for grid, text, goal, w in zip(data.grids, data.instructions, data.goals, data.worlds)
+            if generator.family_of(w) in generator.LOCAL_FAMILIES
+        ]
+        for grid, text, goal in local:
+            assert answer(grid, text) == goal, text
+        rates[mode] = np.mean([occupied_beside(grid, goal) for grid, _, goal in local])
+    assert rates['training'] > rates['mixed'] + 0.1, rates
+
+
 def test_unique_objects_occur_once_and_objects_scale_with_area():
     """Dense maps have Janner's 8 objects per 100 cells; some maps are sparse or puddle-free."""
     rng = np.random.default_rng(0)

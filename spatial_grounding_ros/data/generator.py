@@ -78,6 +78,11 @@ MODES = {
     # the default's training mix: closest and row-col twice, the two it learns slowest
     'training': FAMILIES + ('closest', 'row-col'),
 }
+# Share of a mode's offset examples (LOCAL_FAMILIES) with a non-unique object put beside the
+# goal. On sparse maps an object there is rare by chance, and a default trained without these
+# sent "two below the rock" with a tree beside the target three below (test_behaviour.py,
+# "an object beside the goal"); only the default's mix has them, the paper's tasks keep Janner's.
+BESIDE_GOAL = {'training': 0.3}
 
 
 def local_phrase(offset: tuple[int, int], name: str) -> str:
@@ -269,8 +274,27 @@ def global_goals(grid: np.ndarray) -> list[tuple[str, tuple[int, int]]]:
     return [g for f in GLOBAL_FAMILIES for g in family_goals(grid, f)]
 
 
-def sample(rng: np.random.Generator, family: str, size: int | tuple[int, int] = 10):
-    """One (grid, instruction, goal) of `family` on a fresh world."""
+def put_beside(grid: np.ndarray, goal: tuple[int, int], rng: np.random.Generator) -> None:
+    """Put a non-unique object on a free grass cell beside `goal` (4-neighbours), if one is."""
+    cells = [
+        (goal[0] + dr, goal[1] + dc)
+        for dr, dc in _SIDES
+        if _inside(grid, goal[0] + dr, goal[1] + dc) and grid[goal[0] + dr, goal[1] + dc] == GRASS
+    ]
+    if cells:
+        name = PUDDLEWORLD_NONUNIQUE[rng.integers(len(PUDDLEWORLD_NONUNIQUE))]
+        grid[cells[rng.integers(len(cells))]] = PUDDLEWORLD.index(name)
+
+
+def sample(
+    rng: np.random.Generator, family: str, size: int | tuple[int, int] = 10, beside: float = 0.0
+):
+    """
+    One (grid, instruction, goal) of `family` on a fresh world.
+
+    An offset family's goal gets a non-unique object beside it with probability `beside`
+    (BESIDE_GOAL); that never changes its answer, which only the unique landmark fixes.
+    """
     while True:
         grid = random_grid(rng, size)
         if family in ('row-col', 'between'):
@@ -281,6 +305,8 @@ def sample(rng: np.random.Generator, family: str, size: int | tuple[int, int] = 
         goals = family_goals(grid, family)
         if goals:
             text, goal = goals[rng.integers(len(goals))]
+            if beside and family in LOCAL_FAMILIES and rng.random() < beside:
+                put_beside(grid, goal, rng)
             return grid, text, goal
 
 
@@ -305,7 +331,8 @@ def generate(
     if size < 5:
         raise ValueError(f'generated worlds need size >= 5, not {size}')
     rng = np.random.default_rng(seed)
-    rows = [sample(rng, families[i % len(families)], size) for i in range(n)]
+    beside = BESIDE_GOAL.get(mode, 0.0)
+    rows = [sample(rng, families[i % len(families)], size, beside) for i in range(n)]
     grids = np.stack([r[0] for r in rows])
     goals = [r[2] for r in rows]
     rewards, terminal = map(
