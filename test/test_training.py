@@ -213,6 +213,33 @@ def test_text_noise_trains_and_is_recorded(tmp_path):
     assert load_checkpoint(path).header['train_config']['text_noise'] == 3
 
 
+def test_text_noise_waits_for_the_attention():
+    """
+    t-RNetAttn's warm-up epochs read clean instructions; noise words come with the attention.
+
+    The warm-up's uniform average over the words cannot pass over a word, and noise there
+    cost "closest" (docs/robustness.md).
+    """
+    from spatial_grounding_ros.core.text import UNK, Vocabulary
+    from spatial_grounding_ros.training.distributed import Group
+    from spatial_grounding_ros.training.epochs import Epochs
+
+    data = generate(64, seed=8, mode='local')
+    vocab = Vocabulary.build(data.instructions)
+    cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab))
+    model = build_model('t-rnet-attn', cfg)
+    unknown = {False: [], True: []}  # attention on -> whether each batch read an <unk>
+    model.register_forward_pre_hook(
+        lambda m, inputs: unknown[m.attention_on].append(bool((inputs[1] == UNK).any()))
+    )
+    run = Epochs(model, [data], vocab, replace(one_epoch(text_noise=10), epochs=2,
+                                               attention_warmup=0.5), Group())
+    run.run(0)
+    run.run(1)
+    assert unknown[False] and not any(unknown[False])  # the warm-up: clean
+    assert sum(unknown[True]) >= 2  # with the attention: noise (half the instructions)
+
+
 def test_init_starts_from_a_checkpoints_weights_and_refuses_another_config():
     import torch
 

@@ -24,7 +24,7 @@ import numpy as np
 import torch
 
 from .datasets import GroundingSet
-from .noise import free_cells, noise_words
+from .noise import ARTICLES, free_cells, VERBS
 from ..core.text import PAD, tokenize, UNK, Vocabulary
 
 
@@ -259,34 +259,32 @@ def add_distractors(
     return grids
 
 
-def noise_word_pools(data: GroundingSet, vocab: Vocabulary) -> list[np.ndarray]:
-    """Return, per example, the ids of the words the robustness study's text noise draws from."""
-    return [
-        np.array([vocab.index[w] for w in noise_words(grid, text, data.entities, vocab)])
-        for grid, text in zip(data.grids, data.instructions)
-    ]
+def filler_word_ids(vocab: Vocabulary) -> np.ndarray:
+    """Return the ids of the filler words training inserts: noise.VERBS and noise.ARTICLES."""
+    return np.array([vocab.index[w] for w in (*VERBS, *ARTICLES) if w in vocab.index])
 
 
 def insert_noise_words(
-    tokens: torch.Tensor, pools: list[np.ndarray], most: int, rng: np.random.Generator
+    tokens: torch.Tensor, fillers: np.ndarray, most: int, rng: np.random.Generator
 ) -> torch.Tensor:
     """
     Insert noise words into half the instructions of a batch; return the new (B, L') tokens.
 
     The textual counterpart of add_distractors: an instruction chosen gets 1..`most` words at
     one random position, as the robustness study inserts them, each an unknown word (<unk>,
-    what any word outside the vocabulary becomes) or, with equal chance, one of its noise
-    words (`pools`: verbs, articles, names of kinds absent and unreferenced;
-    noise_word_pools). The other half stay clean, so clean instructions keep their weight.
-    `rng` alone draws everything, so data-parallel processes agree.
+    what any word outside the vocabulary becomes) or, with equal chance, a filler word
+    (`fillers`: filler_word_ids). Names of kinds are never inserted: a name is content, and
+    the Grounder leaves out the names of landmarks the map does not hold. The other half stay
+    clean, so clean instructions keep their weight. `rng` alone draws everything, so
+    data-parallel processes agree.
     """
     lengths = (tokens != PAD).sum(1).tolist()
     out = torch.full((len(tokens), tokens.shape[1] + most), PAD, dtype=tokens.dtype)
-    for i, (row, n, pool) in enumerate(zip(tokens.tolist(), lengths, pools)):
+    for i, (row, n) in enumerate(zip(tokens.tolist(), lengths)):
         k = int(rng.integers(1, most + 1)) if rng.random() < 0.5 else 0
         at = int(rng.integers(0, n + 1))
         words = [
-            UNK if unknown or not len(pool) else int(pool[rng.integers(len(pool))])
+            UNK if unknown or not len(fillers) else int(fillers[rng.integers(len(fillers))])
             for unknown in rng.random(k) < 0.5
         ]
         out[i, :n + k] = torch.tensor(row[:at] + words + row[at:n], dtype=tokens.dtype)

@@ -20,7 +20,7 @@ import torch.nn.functional as F
 
 from . import distributed
 from ..core.text import Vocabulary
-from ..data.augment import add_distractors, insert_noise_words, noise_word_pools
+from ..data.augment import add_distractors, filler_word_ids, insert_noise_words
 from ..data.datasets import GroundingSet
 
 
@@ -88,7 +88,7 @@ class Epochs:
             [*model.parameters()] + ([self.goal_log_scale] if tc.learn_goal_scale else []),
             lr=tc.lr,
         )
-        self.encoded, self.word_pools = [], []
+        self.encoded = []
         for part in parts:
             grids, tokens = encode(vocab, part)
             self.encoded.append(
@@ -100,7 +100,6 @@ class Epochs:
                     (tokens != 0).sum(1).numpy(),
                 )
             )
-            self.word_pools.append(noise_word_pools(part, vocab) if tc.text_noise else None)
         self.steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
         # attention starts uniform (its weights 0): until warmup, the attention-free forward
         self.warmup = (
@@ -112,6 +111,7 @@ class Epochs:
         self.rng = np.random.default_rng(tc.seed)
         self.distractor_rng = np.random.default_rng([tc.seed, 1])  # the same in every process
         self.text_noise_rng = np.random.default_rng([tc.seed, 2])
+        self.fillers = filler_word_ids(vocab)
 
     def schedule(self, epochs: int):
         """Return a cosine decay from the optimizer's learning rate over `epochs` epochs."""
@@ -147,12 +147,12 @@ class Epochs:
                 self.model, batch_grids, goals[batch], tc.distractors, self.distractor_rng
             )
         batch_tokens = tokens[batch]
-        if tc.text_noise:  # likewise
+        # likewise; only once the attention learns, which can pass over a word: the warm-up's
+        # uniform average over the words cannot, and noise there cost "closest"
+        # (docs/robustness.md)
+        if tc.text_noise and (not self.warmup or self.model.attention_on):
             batch_tokens = insert_noise_words(
-                batch_tokens,
-                [self.word_pools[part][i] for i in idx],
-                tc.text_noise,
-                self.text_noise_rng,
+                batch_tokens, self.fillers, tc.text_noise, self.text_noise_rng
             )
         # this process's share (weight 1.0: the whole batch, alone)
         share, weight = distributed.shard(np.arange(len(idx)), processes)

@@ -92,8 +92,8 @@ class TrainConfig:
     )
     text_noise: int | None = option(
         None,
-        'up to this many noise words (unknown words, verbs, articles, absent object names) at '
-        "one position of half the training instructions (0: none; default: the task's)",
+        'up to this many noise words (unknown words, verbs, articles) at one position of half '
+        "the training instructions, once the attention trains (0: none; default: the task's)",
         low=0,
         high=MAX_K,  # as many as the robustness study inserts
     )
