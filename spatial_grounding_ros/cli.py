@@ -71,13 +71,13 @@ def cmd_reproduce(args) -> int:
     from .studies.reproduce import reproduce_ablation, reproduce_suite, reproduce_value_maps
 
     if args.ablation:
-        reproduce_ablation(args.data, args.out, threads=args.threads)
+        reproduce_ablation(args.data, args.out, threads=args.jobs)
         return 0
     if args.suite_only:
         reproduce_suite(args.out)
         return 0
     reproduce_value_maps(
-        args.data, args.out, args.epochs_scale, args.tasks, args.models, args.threads
+        args.data, args.out, args.epochs_scale, args.tasks, args.models, args.jobs
     )
     return 0
 
@@ -167,7 +167,10 @@ def build_parser() -> argparse.ArgumentParser:
         help='multiply every epoch budget (e.g. 0.1 for a quick check)',
     )
     r.add_argument(
-        '--threads', type=ranged(int, low=1), default=2, help='torch threads per training run'
+        '--jobs',
+        type=ranged(int, low=1),
+        default=2,
+        help='training runs at a time, one thread each (--ablation: one run on this many threads)',
     )
     r.add_argument(
         '--suite-only',

@@ -151,7 +151,7 @@ def test_train_refuses_an_option_out_of_its_range(argv, needle, tmp_path):
 @pytest.mark.parametrize(
     'argv, needle',
     [
-        (['reproduce', '--threads', '0'], 'argument --threads: must be at least 1, got 0'),
+        (['reproduce', '--jobs', '0'], 'argument --jobs: must be at least 1, got 0'),
         (['reproduce', '--tasks', 'pw-mars'], "argument --tasks: invalid choice: 'pw-mars'"),
         (['reproduce-rl', '--jobs', '0'], 'argument --jobs: must be at least 1, got 0'),
         (['reproduce-rl', '--episodes-scale', '-1'], 'argument --episodes-scale: must be'),
