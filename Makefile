@@ -44,7 +44,7 @@ test: $(INTERFACES)
 test-fast: $(INTERFACES)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(PY) -m pytest -q -m fast test
 
-# Every row of the value-map table, trained and evaluated one after another on 2 threads
+# Every row of the value-map table, trained and evaluated two at a time, one thread each
 # (training is deterministic there: the same code gives the same checkpoint, bit for bit):
 # results/value_map.json, results/value_map.md, the shipped checkpoints
 reproduce: $(INTERFACES)
