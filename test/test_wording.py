@@ -18,7 +18,8 @@ from spatial_grounding_ros.core.wording import (
     tidy,
     unpossessed,
 )
-from spatial_grounding_ros.data.paraphrase import paraphrase
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.data.paraphrase import paraphrase, paraphrased
 from spatial_grounding_ros.grounder import Grounder
 
 
@@ -31,6 +32,11 @@ from spatial_grounding_ros.grounder import Grounder
         ('navigate to the tree nearest to the heart thanks',
          'reach the tree closest to the heart'),
         ('go to the leftmost house', 'reach the westernmost house'),
+        # the human PuddleWorld annotators' own extremes
+        ('go to the left most tree', 'reach the westernmost tree'),
+        ('the bottom most house', 'the southernmost house'),
+        ('move to the upper most rock', 'reach the northernmost rock'),
+        ('go to the most right horse', 'reach the easternmost horse'),
         ('move to the place in between the star and the circle',
          'reach the cell between the star and the circle'),
         ('go to the second square below the sink', 'reach the cell two below the sink'),
@@ -63,6 +69,22 @@ def test_paraphrases_keep_names_and_vary():
     texts = {paraphrase('reach cell two below star', rng, {'star'}) for _ in range(30)}
     assert len(texts) > 10 and all(t.split()[-1] in ('star', 'please', 'thanks', 'now')
                                    or 'star' in t.split() for t in texts)
+
+
+def test_a_share_of_generated_instructions_is_paraphrased_into_the_same_request():
+    """The training augmentation: worlds kept, a share reworded, each read back as it was."""
+    data = generate(300, seed=2, mode='training')
+    reworded = paraphrased(data, 0.5, seed=2)
+    assert np.array_equal(reworded.grids, data.grids) and reworded.goals is data.goals
+    changed = [(a, b) for a, b in zip(data.instructions, reworded.instructions) if a != b]
+    assert 0.3 < len(changed) / len(data) < 0.55  # some draws keep every phrase as it was
+    for before, after in changed:
+        read = canonical(tokenize(after))
+        # the grammar reads the request back: the same words, but the filler and the units
+        assert [w for w in read if w not in ('cell', 'the')] == [
+            w for w in tokenize(before) if w not in ('cell', 'the')
+        ], (before, after)
+    assert paraphrased(data, 0.0, seed=2) is data
 
 
 @pytest.fixture(scope='module')

@@ -48,10 +48,23 @@ PHRASES = {
     # "the chair nearest the door": the model learned the relation with its "to"
     'closest to the': ['nearest the', 'closest the'],
     'between': ['in between', 'halfway between', 'midway between'],
-    'westernmost': ['leftmost', 'farthest west', 'most western', 'furthest west'],
-    'easternmost': ['rightmost', 'farthest east', 'most eastern', 'furthest east'],
-    'northernmost': ['topmost', 'uppermost', 'highest', 'farthest north', 'most northern'],
-    'southernmost': ['bottommost', 'lowest', 'farthest south', 'most southern'],
+    # the human PuddleWorld annotators' own: "the left most tree", "the bottom most house"
+    'westernmost': [
+        'leftmost', 'farthest west', 'most western', 'furthest west', 'left most', 'most left',
+        'west most',
+    ],
+    'easternmost': [
+        'rightmost', 'farthest east', 'most eastern', 'furthest east', 'right most',
+        'most right', 'east most',
+    ],
+    'northernmost': [
+        'topmost', 'uppermost', 'highest', 'farthest north', 'most northern', 'top most',
+        'upper most', 'north most', 'most north',
+    ],
+    'southernmost': [
+        'bottommost', 'lowest', 'farthest south', 'most southern', 'bottom most', 'lower most',
+        'south most', 'most south',
+    ],
     'reach': [
         'go to', 'move to', 'drive to', 'navigate to', 'head to', 'travel to', 'get to',
         'proceed to', 'stop on', 'stop at', 'park on', 'park at', 'go', 'move', 'drive',
