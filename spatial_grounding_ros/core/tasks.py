@@ -43,6 +43,9 @@ class Task:
     # noise words inserted into half the training instructions, at most (augment.
     # insert_noise_words; 0: none)
     text_noise: int = 0
+    # share of the generated training instructions worded as people word them (data/
+    # paraphrase.py; 0: none)
+    paraphrase: float = 0.0
     # a model's own TrainConfig fields on this task, over the task's (the paper's baselines)
     recipes: dict = field(default_factory=dict)
     # RL episodes of `reproduce-rl` (None: not one of the paper's RL rows)

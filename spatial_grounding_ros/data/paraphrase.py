@@ -15,8 +15,11 @@ suite measures the node on these (`suite --wording paraphrase`).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
+from .datasets import GroundingSet
 from ..core.checks import NUMBERS
 from ..core.text import tokenize
 from ..core.wording import COUNTS, PHRASES
@@ -50,6 +53,25 @@ def paraphrase(instruction: str, rng: np.random.Generator, names=()) -> str:
     opening = OPENINGS[rng.integers(len(OPENINGS))]
     closing = CLOSINGS[rng.integers(len(CLOSINGS))]
     return ' '.join(w for w in (opening, *out, closing) if w)
+
+
+def paraphrased(data: GroundingSet, share: float, seed: int) -> GroundingSet:
+    """
+    Return `data` with `share` of its instructions reworded (paraphrase), its names kept.
+
+    A training augmentation: the model learns the wordings themselves, as the human data's
+    annotators use some of them ("the left most tree"); the Grounder still reads a user's
+    wording into the model's words. Its own generator, so the worlds are the same at any share.
+    """
+    if not share:
+        return data
+    rng = np.random.default_rng([seed, 3])
+    names = {w for name in data.entities.names for w in name.split('_')}
+    instructions = [
+        paraphrase(text, rng, names) if rng.random() < share else text
+        for text in data.instructions
+    ]
+    return replace(data, instructions=instructions)
 
 
 # cell sizes a robot's map has (metres): the metric suite draws one per instruction

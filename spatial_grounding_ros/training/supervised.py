@@ -37,6 +37,7 @@ from ..data.datasets import (
 )
 from ..data.generator import generate, MODES
 from ..data.noise import MAX_K
+from ..data.paraphrase import paraphrased
 from ..models.checkpoints import load_checkpoint, save_checkpoint
 from ..models.config import ModelConfig
 from ..models.protocol import Capabilities
@@ -96,6 +97,13 @@ class TrainConfig:
         "the training instructions, once the attention trains (0: none; default: the task's)",
         low=0,
         high=MAX_K,  # as many as the robustness study inserts
+    )
+    paraphrase: float | None = option(
+        None,
+        'share of the generated training instructions reworded as people word them '
+        "(data/paraphrase.py; 0: none; default: the task's)",
+        low=0.0,
+        high=1.0,
     )
     goal_weight: float | None = option(
         None, "weight of the goal-cell cross-entropy beside the MSE (default: the task's)",
@@ -190,14 +198,9 @@ def training_parts(
         for n, (size, share) in enumerate(SYNTHETIC_SIZES):
             count = int(round(tc.synthetic * share))
             if count:
-                parts.append(
-                    generate(
-                        count,
-                        seed=10_000 + 100 * tc.seed + n,
-                        mode=task.generator_mode,
-                        size=size,
-                    )
-                )
+                seed = 10_000 + 100 * tc.seed + n
+                generated = generate(count, seed=seed, mode=task.generator_mode, size=size)
+                parts.append(paraphrased(generated, tc.paraphrase or 0.0, seed))
     # one set per map size, so that a batch holds maps of one size
     by_size: dict[tuple, list[GroundingSet]] = {}
     for part in parts:
