@@ -42,10 +42,18 @@ from .core.wording import (
     unpossessed,
     wording_words,
 )
+from .data.augment import MIRROR_IMAGES, SWAP_TABLES, swap_words
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 
 DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
+# the map as it is, then its mirror images (the map axes each flips), as training mirrors its
+# human examples (data/augment.py)
+IMAGES = ((), *MIRROR_IMAGES)
+# maps of up to this many cells (128x128) are grounded with their mirror images: four times the
+# work, 2.6 ms against 0.6 ms at 10x10 and 28 against 15 ms at 64x64, but 5-7 times at 256x256
+# and more, where the tiled output network dominates (docs/benchmarks.md)
+MIRROR_AVERAGE_CELLS = 128 * 128
 
 
 # how many next-best cells a grounding reports
@@ -116,6 +124,23 @@ def shifted(values: np.ndarray, offset: tuple[int, int]) -> np.ndarray:
     return out
 
 
+def mirrored(text: str, axes: tuple[int, ...]) -> str:
+    """Return an instruction as said of the map flipped along `axes` (its direction words)."""
+    for axis in axes:
+        text = swap_words(text, SWAP_TABLES[axis])
+    return text
+
+
+def imaged(grid: np.ndarray, images) -> torch.Tensor:
+    """Return the map's `images` (each the axes it flips) as one batch (I, H, W)."""
+    return torch.as_tensor(np.stack([np.flip(grid, axes) for axes in images]))
+
+
+def averaged(values: np.ndarray, images) -> np.ndarray:
+    """Return the mean of the images' value maps (I, H, W), each flipped back."""
+    return np.mean([np.flip(v, axes) for v, axes in zip(values, images)], 0)
+
+
 def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
     """Return the cell of any of `kinds` nearest `cell` (Euclidean), or None."""
     where = np.argwhere(np.isin(grid, kinds))
@@ -134,6 +159,7 @@ class Grounder:
         cached_instructions: int = 64,
         cell_size: float | None = None,
         kinds_by: str = 'name',
+        mirror_average_cells: int = MIRROR_AVERAGE_CELLS,
     ):
         """
         Wrap a loaded checkpoint, for maps in `entities` (default: the checkpoint's table).
@@ -143,8 +169,12 @@ class Grounder:
         `cell_size`: metres per cell, for distances in metres (core/units.py); a table's
         landmarks may cover several cells (EntityTable.has_footprints, core/footprints.py).
         `kinds_by`: how the model's own landmark names take its kinds (lexicon.KINDS_BY).
-        The text codes of the last `cached_instructions` instructions are kept (t-RNetAttn: the
-        relation table over all kinds), since a node grounds the same instruction on new maps.
+        `mirror_average_cells`: on maps of at most this many cells the value map is the mean of
+        the model's over the map and its three mirror images, each read with its direction
+        words swapped (IMAGES, in one batch): where the model is unsure of a cell, its mirror
+        images seldom are unsure the same way (0: never). The text codes of the last
+        `cached_instructions` instructions are kept (t-RNetAttn: the relation table over all
+        kinds), since a node grounds the same instruction on new maps.
         """
         if not 0 <= min_confidence <= 1:
             raise ValueError(f'min_confidence must be in 0..1, got {min_confidence}')
@@ -153,6 +183,7 @@ class Grounder:
         self.model_entities = loaded.entities
         self.entities = entities if entities is not None else loaded.entities
         self.min_confidence, self.cell_size = min_confidence, cell_size
+        self.mirror_average_cells = mirror_average_cells
         self.translation = None
         if loaded.entities.domain == 'puddleworld':
             self.translation = Translation(
@@ -173,7 +204,7 @@ class Grounder:
         self.temperature = float(loaded.header.get('calibration', {}).get('temperature', 1.0))
         self.model.eval()
         # instruction -> (its words for the model, text code); least recently used first
-        self.text_codes: OrderedDict[str, tuple[str, TextCode]] = OrderedDict()
+        self.text_codes: OrderedDict[str, tuple[str, TextCode, TextCode]] = OrderedDict()
 
     @classmethod
     def from_checkpoint(
@@ -229,17 +260,19 @@ class Grounder:
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
-    def text_code(self, instruction: str) -> tuple[str, TextCode]:
+    def text_code(self, instruction: str) -> tuple[str, TextCode, TextCode]:
         """
-        Return what the model reads of an instruction (reword) and its text code.
+        Return what the model reads of an instruction (reword) and its text codes.
 
-        Both are computed once while the instruction is in use.
+        The second code holds it as said of each image of the map (IMAGES: the first is the
+        instruction as it is). All are computed once while the instruction is in use.
         """
         coded = self.text_codes.pop(instruction, None)
         if coded is None:
             words = self.reword(instruction)
-            tokens = torch.as_tensor(self.vocab.encode_batch([words]))
-            coded = words, self.model.text_code(tokens)
+            said = [mirrored(words, axes) for axes in IMAGES]
+            tokens = torch.as_tensor(self.vocab.encode_batch(said))
+            coded = words, self.model.text_code(tokens[:1]), self.model.text_code(tokens)
             if len(self.text_codes) >= self.cached_instructions:
                 self.text_codes.popitem(last=False)
         self.text_codes[instruction] = coded
@@ -269,9 +302,12 @@ class Grounder:
         else:
             model_text = distances.model_text
             model_grid, mentions = grid, self.lexicon.mentions(tokenize(model_text))
-        model_text, code = self.text_code(model_text)
-        values, aux = self.model.ground(torch.as_tensor(model_grid)[None], code, return_aux=True)
-        values = shifted(values[0].numpy(), distances.extra)
+        model_text, code, imaged_code = self.text_code(model_text)
+        images = IMAGES if model_grid.size <= self.mirror_average_cells else IMAGES[:1]
+        values, aux = self.model.ground(
+            imaged(model_grid, images), imaged_code if len(images) > 1 else code, True
+        )
+        values = shifted(averaged(values.numpy(), images), distances.extra)
         best, confidence, alternatives = self.judge(values)
         reason = structural_reason(self.entities, grid, *reworded(words, mentions), self.known)
         if reason is None and int(grid[best]) in self.entities.obstacles:

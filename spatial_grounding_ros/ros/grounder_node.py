@@ -47,10 +47,10 @@ import torch
 
 from . import convert
 from .ground_service import answer, goal_pose
+from .grounder_parameters import PARAMETERS
 from .node_support import (
     declare_parameters,
     guard_change_state,
-    Param,
     publish_status,
     report,
     SEE_OVERRIDES,
@@ -60,106 +60,11 @@ from .package_files import find_config
 from .qos import LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
-from ..grounder import DEFAULT_CHECKPOINT, Grounder, Grounding
+from ..grounder import Grounder, Grounding
 from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
-GOAL_STAMPS = ('map', 'now')
 STEADY = ClockType.STEADY_TIME  # instruction_timeout is wall time, also under use_sim_time
-
-PARAMETERS = (
-    Param(
-        'checkpoint',
-        DEFAULT_CHECKPOINT,
-        'packaged checkpoint name (spatial_grounding_ros/checkpoints/<name>.pt) or a path '
-        'to a .pt; loaded on configure',
-        read_only=True,
-        non_empty=True,
-    ),
-    Param(
-        'entity_table',
-        'entities_puddleworld.yaml',
-        'entity table naming the entity_map cell values: a file in config/ or a path; any '
-        'table for a PuddleWorld model (its landmarks are read by role), only its own for '
-        'another model (checked on configure)',
-        read_only=True,
-        non_empty=True,
-    ),
-    Param(
-        'max_cells',
-        1024 * 1024,
-        'larger entity maps are rejected (work and memory grow with the cells: a 1024x1024 '
-        'map grounds in about a second, peak RSS under 1 GB; docs/benchmarks.md)',
-        low=1,
-        high=4096 * 4096,
-    ),
-    Param('max_instruction_chars', 500, 'longer instructions are rejected', low=1, high=100000),
-    Param(
-        'reground_on_map_change',
-        False,
-        'ground the held instruction again on each new entity_map (false: a new map is used '
-        'by the next instruction, so Nav2 does not get a new goal on every map update)',
-    ),
-    Param(
-        'min_confidence',
-        0.0,
-        'decline (no goal; a WARN diagnostic, reason low-confidence) when the calibrated '
-        'probability of the best cell is below this; 0 never declines for confidence',
-        low=0.0,
-        high=1.0,
-    ),
-    Param(
-        'instruction_timeout',
-        30.0,
-        'seconds an instruction may wait for a valid entity_map; then it is dropped with a '
-        'WARN diagnostic, so a later map never grounds it; 0 = wait forever',
-        low=0.0,
-        high=86400.0,
-    ),
-    Param(
-        'goal_heading',
-        'identity',
-        "goal orientation: identity (the map frame's +x), face_referent (toward the named "
-        "landmark's cell nearest the goal), keep (the yaw of the latest robot_pose)",
-        choices=convert.GOAL_HEADINGS,
-    ),
-    Param(
-        'goal_stamp',
-        'map',
-        "goal_pose stamp: map = the entity map's stamp (where the map was), now = the node "
-        "clock's time of grounding",
-        choices=GOAL_STAMPS,
-    ),
-    Param(
-        'value_map_encoding',
-        'display',
-        'value_map cells: display = best cell 100, worst 0 (a colour ramp); cost = best 0, '
-        'worst 100 (a costmap colour scheme; not an input for a Nav2 costmap layer)',
-        choices=convert.VALUE_MAP_ENCODINGS,
-    ),
-    Param(
-        'default_frame_id',
-        'map',
-        "frame of the outputs when the entity_map's header.frame_id is empty",
-        non_empty=True,
-    ),
-    Param(
-        'torch_threads',
-        1,
-        'torch intra-op threads (process-wide), set on configure: 1 keeps latency steady '
-        "next to other busy processes, 0 leaves torch's default (all cores)",
-        read_only=True,
-        low=0,
-        high=1024,
-    ),
-    Param(
-        'autostart',
-        True,
-        'configure and activate at start-up (false: wait for a lifecycle manager on '
-        '<node>/change_state)',
-        read_only=True,
-    ),
-)
 
 
 class GrounderNode(LifecycleNode):
@@ -270,7 +175,10 @@ class GrounderNode(LifecycleNode):
         table = EntityTable.from_yaml(table_path)
         # a PuddleWorld model reads any table; another only its own (Grounder says so)
         grounder = Grounder(
-            load_checkpoint(self.param('checkpoint')), table, self.param('min_confidence')
+            load_checkpoint(self.param('checkpoint')),
+            table,
+            self.param('min_confidence'),
+            mirror_average_cells=self.param('mirror_average_cells'),
         )
         self.grounder = grounder
         self.get_logger().info(

@@ -1,0 +1,72 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""The Grounder's value map is the mean over the map's mirror images, on maps up to a size."""
+
+import numpy as np
+import pytest
+from spatial_grounding_ros.core.entities import PUDDLEWORLD
+from spatial_grounding_ros.grounder import Grounder, mirrored
+import torch
+
+E = PUDDLEWORLD.index
+
+
+@pytest.fixture(scope='module')
+def loaded():
+    return Grounder.from_checkpoint().loaded
+
+
+def model_map(loaded, grid, text):
+    """Return the model's own value map of one map and one instruction, as `eval` computes it."""
+    tokens = torch.as_tensor(loaded.vocab.encode_batch([text]))
+    with torch.no_grad():
+        return loaded.model(torch.as_tensor(grid)[None], tokens)[0].numpy()
+
+
+def test_mirrored_instructions_swap_their_direction_words():
+    text = 'reach cell two to the left of the westernmost rock and one above it'
+    assert mirrored(text, (1,)) == (
+        'reach cell two to the right of the easternmost rock and one above it'
+    )
+    assert mirrored(text, (0,)) == (
+        'reach cell two to the left of the westernmost rock and one below it'
+    )
+    assert mirrored(mirrored(text, (1, 0)), (1, 0)) == text
+
+
+def test_the_value_map_is_the_mean_over_the_mirror_images(loaded):
+    grid = np.zeros((9, 11), dtype=np.int64)
+    grid[2, 3], grid[6, 8], grid[4, 1], grid[7, 2] = E('star'), E('rock'), E('tree'), E('rock')
+    text = 'reach cell two to the right of the northernmost rock'
+    got = Grounder(loaded).ground(grid, text)
+    single = Grounder(loaded, mirror_average_cells=0)
+    want = np.mean(
+        [
+            np.flip(single.ground(np.flip(grid, axes).copy(), mirrored(text, axes)).values, axes)
+            for axes in ((), (1,), (0,), (1, 0))
+        ],
+        0,
+    )
+    np.testing.assert_allclose(got.values, want, atol=1e-5)
+    assert got.goal == (6, 10)  # two to the right of the northernmost rock, (6, 8)
+    one = single.ground(grid, text)
+    assert not np.allclose(got.values, one.values)  # the images do add something
+    # the single grounding is the model's own map of the grid the translation hands it
+    model_grid = single.translation(grid, one.model_instruction).grid
+    np.testing.assert_allclose(
+        one.values, model_map(loaded, model_grid, one.model_instruction), atol=1e-5
+    )
+
+
+def test_maps_over_the_limit_are_grounded_once(loaded):
+    grid = np.zeros((12, 12), dtype=np.int64)
+    grid[5, 5] = E('star')
+    text = 'reach cell two below star'
+    limited = Grounder(loaded, mirror_average_cells=12 * 12 - 1).ground(grid, text)
+    once = Grounder(loaded, mirror_average_cells=0).ground(grid, text)
+    np.testing.assert_array_equal(limited.values, once.values)
+    assert limited.goal == once.goal == (7, 5)
