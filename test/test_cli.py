@@ -190,6 +190,7 @@ def test_train_options_are_the_config_fields():
         goal_weight=TASKS['pw'].goal_weight,
         distractors=TASKS['pw'].distractors,
         text_noise=TASKS['pw'].text_noise,
+        paraphrase=TASKS['pw'].paraphrase,
     )
     # the paper's baselines have a recipe of their own: MSE alone, no distractor objects
     baseline = TrainConfig().for_task('pw-local', 't-cnn')
