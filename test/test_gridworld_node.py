@@ -333,7 +333,7 @@ def test_bad_start_up_input_is_one_error_line_and_exit_1(tmp_path, parameter, ne
         ],
         capture_output=True,
         text=True,
-        timeout=120,
+        timeout=600,
     )
     assert result.returncode == 1, result.stderr
     err = result.stderr

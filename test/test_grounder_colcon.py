@@ -73,7 +73,7 @@ def install_prefix(tmp_path_factory):
         cwd=workspace,
         capture_output=True,
         text=True,
-        timeout=120,
+        timeout=600,
     )
     assert build.returncode == 0, build.stdout[-3000:] + build.stderr[-3000:]
     return workspace / 'install' / PACKAGE  # colcon's default isolated layout
