@@ -213,6 +213,7 @@ class Grounder:
         entities: str | Path | EntityTable | None = None,
         min_confidence: float = 0.0,
         cell_size: float | None = None,
+        mirror_average_cells: int = MIRROR_AVERAGE_CELLS,
     ) -> 'Grounder':
         """Load a packaged checkpoint by name or a path, for maps of any entity table."""
         return cls(
@@ -220,6 +221,7 @@ class Grounder:
             resolve_table(entities),
             min_confidence,
             cell_size=cell_size,
+            mirror_average_cells=mirror_average_cells,
         )
 
     def check(self, grid: np.ndarray, instruction: str) -> None:

@@ -67,6 +67,8 @@ def test_bench_writes_every_section(tmp_path):
             assert 0 < row[way]['p50_ms'] <= row[way]['p99_ms'] <= row[way]['max_ms'], way
         assert row['ground_over_head'] == row['ground_cached']['p50_ms'] / row['head']['p50_ms']
         assert row['peak_rss_mb'] > 0 and row['reference_peak_rss_mb'] > 0
+        # maps this small are grounded with their three mirror images: the head is timed on four
+        assert row['images'] == 4 and row['ground_one_image']['p50_ms'] > 0
     assert result['throughput']['batch'] == 16 and result['throughput']['maps_per_second'] > 0
     step = result['training_step']
     assert step['batch'] == 4 and step['model'] == 't-rnet-attn'
@@ -80,7 +82,7 @@ def test_bench_writes_every_section(tmp_path):
     assert result['checks']['ground_over_head_128x128']['met'] is None  # not measured here
     # the markdown table beside the JSON is the JSON's table
     assert out.with_suffix('.md').read_text() == bench.table(result)
-    assert '| 16x16 |' in bench.table(result)
+    assert '| 16x16 | 4 |' in bench.table(result)
     assert 'Training step (t-rnet-attn, a batch of 4 generated maps' in bench.table(result)
 
 
