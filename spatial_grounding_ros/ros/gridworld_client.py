@@ -67,11 +67,13 @@ class GridWorldClient(Node):
         self.poses: list[PoseStamped] = []
         self.rewards: list[float] = []
         self.terminals: list[bool] = []
-        self.create_subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_map, LATCHED)
-        self.create_subscription(String, topics.INSTRUCTION, self.on_instruction, LATCHED)
-        self.create_subscription(PoseStamped, topics.AGENT_POSE, self.on_pose, STREAM)
-        self.create_subscription(Float32, topics.REWARD, self.on_reward, STREAM)
-        self.create_subscription(Bool, topics.TERMINATED, self.on_terminated, STREAM)
+        self.streams = [
+            self.create_subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_map, LATCHED),
+            self.create_subscription(String, topics.INSTRUCTION, self.on_instruction, LATCHED),
+            self.create_subscription(PoseStamped, topics.AGENT_POSE, self.on_pose, STREAM),
+            self.create_subscription(Float32, topics.REWARD, self.on_reward, STREAM),
+            self.create_subscription(Bool, topics.TERMINATED, self.on_terminated, STREAM),
+        ]
         self.action_pub = self.create_publisher(Int32, topics.ACTION, STREAM)
         self.action_space = spaces.Discrete(len(ACTIONS))
         self.next_client = self.create_client(Trigger, topics.NEXT_EPISODE)
@@ -109,6 +111,12 @@ class GridWorldClient(Node):
                 )
             rclpy.spin_once(self, timeout_sec=0.05)
 
+    def matched(self) -> bool:
+        """Return whether every topic with the node has matched, both ways."""
+        return self.action_pub.get_subscription_count() > 0 and all(
+            subscription.get_publisher_count() > 0 for subscription in self.streams
+        )
+
     def observation(self) -> dict:
         pose = self.poses[-1].pose.position
         agent = convert.point_to_cell(pose.x, pose.y, self.map_msg.info)
@@ -122,6 +130,9 @@ class GridWorldClient(Node):
                 'its services: reset() takes no seed or options'
             )
         self.wait_for('next_episode service', lambda: self.next_client.service_is_ready())
+        # volatile topics drop what is published before both ends match: the episode's pose
+        # (and a step's action) would be lost to a node that answered the service first
+        self.wait_for('matched topics', self.matched)
         before = dict(self.counts)
         episode_topics = ('map', 'instruction', 'pose')  # a new episode republishes these
 
