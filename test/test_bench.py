@@ -76,6 +76,8 @@ def test_bench_writes_every_section(tmp_path):
     ros = result['ros_end_to_end']
     assert ros['requests'] == 5 and 0 < ros['p50_ms'] <= ros['p99_ms']
     assert ros['node_rss_mb_end'] > 0
+    one = result['ros_end_to_end_one_image']
+    assert one['requests'] == 5 and 0 < one['p50_ms'] <= one['p99_ms']
     memory = result['memory']
     assert memory['rss_mb_after_110'] > 0 and 'Grounder.ground()' in memory['measured']
     assert set(result['checks']) == set(bench.TARGETS)

@@ -89,12 +89,14 @@ def round_trip_latency(
     requests: int,
     warmup: int = 20,
     progress=None,
+    parameters: tuple = (),
 ) -> dict:
     """
     Measure p50/p99 instruction -> goal_pose latency and the grounder's RSS.
 
     p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
-    grounder process's RSS after the warm-up and at the end.
+    grounder process's RSS after the warm-up and at the end. `parameters`: more of the node's
+    parameters, as `name:=value`.
     """
     # loopback only, and a domain of its own unless the caller chose one (both processes)
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
@@ -107,6 +109,7 @@ def round_trip_latency(
             f'__ns:={NAMESPACE}',
             '-p',
             f'checkpoint:={checkpoint}',
+            *(a for p in parameters for a in ('-p', p)),
         ],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

@@ -272,6 +272,16 @@ def run(args, ros_latency: Callable[..., dict] | None = None) -> dict:
             result['ros_end_to_end'] = ros_latency(
                 args.checkpoint, grid, texts, args.ros_requests, progress=progress
             )
+        # the same node grounding each map once (no mirror images), in the same run
+        with tqdm(total=args.ros_requests, desc='ROS round trips, one image') as progress:
+            result['ros_end_to_end_one_image'] = ros_latency(
+                args.checkpoint,
+                grid,
+                texts,
+                args.ros_requests,
+                progress=progress,
+                parameters=('mirror_average_cells:=0',),
+            )
     result['memory'] = memory_growth(grounder, 100, args.memory_requests)
     result['checks'] = checks(result)
     return result
@@ -362,6 +372,12 @@ def table(result: dict) -> str:
             f'({ros["requests"]} requests; {check_text(checks_["ros_end_to_end_p99_ms"])}); '
             f'grounder node RSS {ros["node_rss_mb_after_warmup"]:.0f} -> '
             f'{ros["node_rss_mb_end"]:.0f} MB.'
+        )
+    one = result.get('ros_end_to_end_one_image')
+    if one:
+        lines.append(
+            f'The same with mirror_average_cells 0 (each map grounded once): p50 '
+            f'{one["p50_ms"]:.2f} ms, p99 {one["p99_ms"]:.2f} ms, max {one["max_ms"]:.2f} ms.'
         )
     memory = result['memory']
     early, total = sorted(int(k.split('_')[-1]) for k in memory if k.startswith('rss_mb_after_'))
