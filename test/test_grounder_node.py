@@ -435,4 +435,9 @@ def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes
         assert not probe.new('goals', before)
     finally:
         grounder.grounder.model = model
+        grounder.grounder.text_codes.clear()  # the failing model's code of the instruction
+    # the failed instruction is still pending, so the next map grounds it: let that happen
+    # (its outputs would otherwise race the good request's)
+    wait_held(nodes, probe.publish_map(WORLDS.grids[1]))
+    assert graph.wait_for(lambda: not grounder.instruction_pending)
     good_request(nodes, reference, world=1)
