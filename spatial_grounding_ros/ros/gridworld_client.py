@@ -131,8 +131,13 @@ class GridWorldClient(Node):
             )
         self.wait_for('next_episode service', lambda: self.next_client.service_is_ready())
         # volatile topics drop what is published before both ends match: the episode's pose
-        # (and a step's action) would be lost to a node that answered the service first
-        self.wait_for('matched topics', self.matched)
+        # (and a step's action) would be lost to a node that answered the service first. And
+        # the node's current episode (latched map and instruction: it plays one from its
+        # start) must be in before the count, or it would pass for the next one
+        self.wait_for(
+            'matched topics',
+            lambda: self.matched() and self.counts['map'] and self.counts['instruction'],
+        )
         before = dict(self.counts)
         episode_topics = ('map', 'instruction', 'pose')  # a new episode republishes these
 
