@@ -42,7 +42,7 @@ from .core.wording import (
     unpossessed,
     wording_words,
 )
-from .data.augment import MIRROR_IMAGES, SWAP_TABLES, swap_words
+from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 
@@ -122,13 +122,6 @@ def shifted(values: np.ndarray, offset: tuple[int, int]) -> np.ndarray:
             max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)
         ]
     return out
-
-
-def mirrored(text: str, axes: tuple[int, ...]) -> str:
-    """Return an instruction as said of the map flipped along `axes` (its direction words)."""
-    for axis in axes:
-        text = swap_words(text, SWAP_TABLES[axis])
-    return text
 
 
 def imaged(grid: np.ndarray, images) -> torch.Tensor:
@@ -272,7 +265,7 @@ class Grounder:
         coded = self.text_codes.pop(instruction, None)
         if coded is None:
             words = self.reword(instruction)
-            said = [mirrored(words, axes) for axes in IMAGES]
+            said = [mirror_instruction(words, axes) for axes in IMAGES]
             tokens = torch.as_tensor(self.vocab.encode_batch(said))
             coded = words, self.model.text_code(tokens[:1]), self.model.text_code(tokens)
             if len(self.text_codes) >= self.cached_instructions:

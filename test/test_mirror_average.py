@@ -9,7 +9,8 @@
 import numpy as np
 import pytest
 from spatial_grounding_ros.core.entities import PUDDLEWORLD
-from spatial_grounding_ros.grounder import Grounder, mirrored
+from spatial_grounding_ros.data.augment import mirror_instruction as mirrored
+from spatial_grounding_ros.grounder import Grounder
 import torch
 
 E = PUDDLEWORLD.index
