@@ -289,6 +289,51 @@ def test_relation_scores_each_pair_at_its_offset():
     assert offsets[9, 17].tolist() == pytest.approx([0, 1 / 7])
 
 
+def test_scene_attributes_by_hand():
+    """Which shapes, colours and shape-colour pairs an image holds: t-VGG's scene labels."""
+    square, circle = sw.SHAPES.index('square'), sw.SHAPES.index('circle')
+    red, blue = sw.COLOUR_NAMES.index('red'), sw.COLOUR_NAMES.index('blue')
+    objects = np.full((2, 5, 5), -1, dtype=np.int64)
+    objects[0, 0, :2] = square, red
+    objects[0, 1, :2] = circle, blue
+    objects[0, 2, :2] = circle, red
+    objects[1, 0, :2] = circle, blue  # one object; the other rows are -1: no object
+    got = sw.scene_attributes(objects)
+    n_s, n_c = len(sw.SHAPES), len(sw.COLOUR_NAMES)
+    assert got.shape == (2, sw.N_ATTRIBUTES) == (2, 8 + 8 + 64)
+
+    def pair(shape, colour):
+        return n_s + n_c + shape * n_c + colour
+
+    first = {square, circle, n_s + red, n_s + blue,
+             pair(square, red), pair(circle, blue), pair(circle, red)}
+    assert set(np.flatnonzero(got[0])) == first
+    assert set(np.flatnonzero(got[1])) == {circle, n_s + blue, pair(circle, blue)}
+
+
+def test_vgg_reads_the_scene_and_the_scene_loss_trains_it(data):
+    """t-VGG's scene head, from the image alone, learns which objects are there."""
+    torch.manual_seed(0)
+    vocab = Vocabulary.build(data.statements)
+    model = build_model('t-vgg', ShapeWorldConfig(vocab_size=len(vocab)))
+    x, t = as_input(data.images[:8]), encode(vocab, data.statements[:8])
+    scene = torch.from_numpy(sw.scene_attributes(data.objects[:8]))
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+    losses = []
+    for _ in range(12):
+        _, aux = model(x, t, return_aux=True)
+        loss = F.binary_cross_entropy_with_logits(aux['scene'], scene)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    assert losses[-1] < 0.8 * losses[0], losses
+    # the scene is the image's: the statement does not change it
+    _, a = model(x, t, return_aux=True)
+    _, b = model(x, t.flip(0), return_aux=True)
+    torch.testing.assert_close(a['scene'], b['scene'])
+
+
 @pytest.mark.parametrize('name', ['t-rnet-attn', 't-vgg'])
 def test_model_trains_and_its_loss_falls(name, data):
     torch.manual_seed(0)

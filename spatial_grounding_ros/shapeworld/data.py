@@ -120,6 +120,24 @@ class ShapeWorldSet:
         )
 
 
+N_ATTRIBUTES = len(SHAPES) + len(COLOURS) + len(SHAPES) * len(COLOURS)
+
+
+def scene_attributes(objects: np.ndarray) -> np.ndarray:
+    """
+    (N, 5, 5) objects -> (N, N_ATTRIBUTES) float32: which shapes, colours and shape-colour
+    pairs each image holds (8 + 8 + 64), the labels of t-VGG's scene loss.
+    """
+    n_shapes, n_colours = len(SHAPES), len(COLOURS)
+    out = np.zeros((len(objects), N_ATTRIBUTES), np.float32)
+    rows, slots = np.nonzero(objects[:, :, 0] >= 0)
+    shape, colour = objects[rows, slots, 0], objects[rows, slots, 1]
+    out[rows, shape] = 1
+    out[rows, n_shapes + colour] = 1
+    out[rows, n_shapes + n_colours + shape * n_colours + colour] = 1
+    return out
+
+
 # --- drawing ------------------------------------------------------------------------------
 
 

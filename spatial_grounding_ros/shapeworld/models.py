@@ -37,20 +37,25 @@ gradient); the relation MLP sees the offset only, the cells' fit enters as the d
 soft maxes instead of the paper's max and linear layer over Z1 flattened (a linear layer over
 64 cells spreads the gradient over 60 empty ones).
 
-t-VGG (Andreas et al. 2017, as the paper describes it): VGG-style convolutions, the image
-features concatenated with the text vector (the mean LSTM output), dense 512, 512 with tanh,
-then the 2-way output.
+t-VGG (Andreas et al. 2017, as the paper describes it, with L3's classifier): VGG-style
+convolutions, each channel's maximum over the image, dense 512, 512 with tanh; the logit of
+"true" is the dot product of that image representation with a vector decoded from the text
+(L3's `ClsModel` scores an image by its representation's product with the description's
+encoding). A scene head on the image representation, trained beside it (which shapes, colours
+and pairs the image holds), stands in for the paper's ImageNet features: with a
+concatenation, a flattened feature map or without the scene loss, t-VGG stayed at chance or
+checked colours only (docs/shapeworld.md).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 import math
 
 import torch
 from torch import nn
 
-from .data import IMAGE
+from .data import IMAGE, N_ATTRIBUTES
 from ..models.encoders import TextEncoder
 from ..models.relation import relation_mlp, split_params
 
@@ -70,8 +75,11 @@ class ShapeWorldConfig:
     # then a max-pool of this side over the feature grid (1: none, 8x8 cells of 8 pixels)
     cell_pool: int = 1
     mlp: tuple = (10, 10)  # relation MLP hidden layers (output 1), tanh (the paper's)
-    vgg_channels: tuple = (32, 32, 32)  # t-VGG: stem and two blocks, 64 -> 4x4
+    # t-VGG: stem and two blocks, 64 -> 4x4, then a max over the image per channel
+    vgg_channels: tuple = (32, 64, 128)
     dense: tuple = (512, 512)  # t-VGG dense layers, tanh (the paper's)
+    # t-VGG's own text encoder: word embedding and LSTM sizes (L3's: 128 and a 512 GRU)
+    vgg_text: tuple = (64, 256)
 
     def to_dict(self) -> dict:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
@@ -201,27 +209,40 @@ class ShapeWorldTRNet(nn.Module):
 
 
 class ShapeWorldVGG(nn.Module):
-    """t-VGG: conv net, [image features; text vector] -> dense 512, 512 (tanh) -> 2."""
+    """t-VGG: conv net, max over the image, dense 512, 512 (tanh); dot product with the text."""
 
     def __init__(self, cfg: ShapeWorldConfig):
         super().__init__()
         self.cfg = cfg
         self.convs = conv_blocks(cfg.vgg_channels, cfg.stem)
-        self.text = TextEncoder(cfg)
-        # the text vector is 30 numbers of about 0.1 beside 512 image features of about 1:
-        # normalised, it is not drowned out at the start
-        self.text_norm = nn.LayerNorm(cfg.hidden)
-        side = IMAGE // cfg.stem // 2 ** (len(cfg.vgg_channels) - 1)
-        sizes = [cfg.vgg_channels[-1] * side * side + cfg.hidden, *cfg.dense]
+        word_dim, hidden = cfg.vgg_text
+        self.text = TextEncoder(replace(cfg, word_dim=word_dim, hidden=hidden))
+        sizes = [cfg.vgg_channels[-1], *cfg.dense]
         layers = []
         for a, b in zip(sizes[:-1], sizes[1:]):
             layers += [nn.Linear(a, b), nn.Tanh()]
-        self.dense = nn.Sequential(*layers, nn.Linear(sizes[-1], 2))
+        self.dense = nn.Sequential(*layers)
+        # L3's classifier (Andreas et al. 2017): the statement's encoding is the weight vector
+        # of a linear classifier over the image's representation
+        self.text_weights = nn.Linear(hidden, cfg.dense[-1])
+        self.bias = nn.Parameter(torch.zeros(1))
+        # which shapes, colours and pairs the image holds, read from its representation and
+        # trained beside the statements (training.TrainConfig.scene_weight): our stand-in for
+        # the ImageNet features the paper's t-VGG read
+        self.scene = nn.Linear(cfg.dense[-1], N_ATTRIBUTES)
+
+    def image(self, images: torch.Tensor) -> torch.Tensor:
+        """(B, 3, 64, 64) -> (B, dense[-1]): each channel's strongest response anywhere."""
+        return self.dense(self.convs(images).amax((2, 3)))
 
     def forward(self, images: torch.Tensor, tokens: torch.Tensor, return_aux: bool = False):
         _, _, text = self.text(tokens)
-        logits = self.dense(torch.cat([self.convs(images).flatten(1), self.text_norm(text)], 1))
-        return (logits, {'relation_map': None, 'attention': None}) if return_aux else logits
+        image = self.image(images)
+        score = (image * self.text_weights(text)).sum(1, keepdim=True) + self.bias
+        logits = torch.cat([torch.zeros_like(score), score], 1)
+        if not return_aux:
+            return logits
+        return logits, {'relation_map': None, 'attention': None, 'scene': self.scene(image)}
 
 
 MODELS = {'t-rnet-attn': ShapeWorldTRNet, 't-vgg': ShapeWorldVGG}
