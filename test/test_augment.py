@@ -15,6 +15,7 @@ from spatial_grounding_ros.core.text import PAD, tokenize, UNK, Vocabulary
 from spatial_grounding_ros.data import datasets, generator
 from spatial_grounding_ros.data.augment import (
     filler_word_ids,
+    absent_name_pools,
     insert_noise_words,
     mirror,
     SWAP_LEFT_RIGHT,
@@ -156,3 +157,40 @@ def test_noise_words_keep_the_instruction_in_order_at_one_position():
         unknown += inserted.count(UNK)
     assert 60 < clean < 140  # about half stay clean
     assert unknown > 50  # about half the inserted words are <unk>
+
+
+def test_absent_name_pools_by_hand():
+    """The names noise_names may insert: kinds neither on the map nor named."""
+    name_ids = np.array([10, 11, 12, -1, 14, 15])  # kind 3's name is not a word of the vocabulary
+    grids = torch.tensor([[[0, 1], [2, 0]], [[0, 0], [0, 0]]])
+    tokens = torch.tensor([[7, 15, 8], [14, 7, 0]])
+    first, second = absent_name_pools(grids, tokens, name_ids)
+    assert first.tolist() == [14]  # 0, 1, 2 on the map, 3 has no word, 5 named
+    assert second.tolist() == [11, 12, 15]  # 0 on the map, 4 named
+
+
+def test_noise_names_insert_only_names_of_absent_kinds():
+    data = generator.generate(200, seed=5, mode='local')
+    vocab = Vocabulary.build(data.instructions)
+    fillers = filler_word_ids(vocab)
+    name_ids = np.array([vocab.index.get(n, -1) for n in data.entities.names])
+    grids = torch.from_numpy(data.grids)
+    tokens = torch.from_numpy(vocab.encode_batch(data.instructions))
+    pools = absent_name_pools(grids, tokens, name_ids)
+    noisy = insert_noise_words(tokens, fillers, 6, np.random.default_rng(0), pools)
+    kinds = {'unknown': 0, 'filler': 0, 'name': 0}
+    for before, after, pool in zip(tokens.tolist(), noisy.tolist(), pools):
+        before, after = [t for t in before if t != PAD], [t for t in after if t != PAD]
+        k = len(after) - len(before)
+        at = next((i for i, (a, b) in enumerate(zip(before, after)) if a != b), len(before))
+        assert after[:at] + after[at + k:] == before
+        for word in after[at:at + k]:
+            if word == UNK:
+                kinds['unknown'] += 1
+            elif word in fillers:
+                kinds['filler'] += 1
+            else:
+                assert word in pool.tolist()  # a name, and one of a kind the map lacks
+                kinds['name'] += 1
+    total = sum(kinds.values())
+    assert all(n > total / 5 for n in kinds.values()), kinds  # about a third each

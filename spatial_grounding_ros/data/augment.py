@@ -264,8 +264,30 @@ def filler_word_ids(vocab: Vocabulary) -> np.ndarray:
     return np.array([vocab.index[w] for w in (*VERBS, *ARTICLES) if w in vocab.index])
 
 
+def absent_name_pools(
+    grids: torch.Tensor, tokens: torch.Tensor, name_ids: np.ndarray
+) -> list[np.ndarray]:
+    """
+    Return, per example, the word ids of the kinds neither on its map nor named in it.
+
+    `name_ids[kind]` is the kind's name's word id (-1: none in the vocabulary). These are the
+    names the robustness study's text-noise inserts, as the paper's noise does.
+    """
+    kinds = np.flatnonzero(name_ids >= 0)
+    out = []
+    for grid, row in zip(grids.numpy(), tokens.numpy()):
+        on_map = np.isin(kinds, grid)
+        named = np.isin(name_ids[kinds], row)
+        out.append(name_ids[kinds[~on_map & ~named]])
+    return out
+
+
 def insert_noise_words(
-    tokens: torch.Tensor, fillers: np.ndarray, most: int, rng: np.random.Generator
+    tokens: torch.Tensor,
+    fillers: np.ndarray,
+    most: int,
+    rng: np.random.Generator,
+    absent_names: list[np.ndarray] | None = None,
 ) -> torch.Tensor:
     """
     Insert noise words into half the instructions of a batch; return the new (B, L') tokens.
@@ -273,9 +295,11 @@ def insert_noise_words(
     The textual counterpart of add_distractors: an instruction chosen gets 1..`most` words at
     one random position, as the robustness study inserts them, each an unknown word (<unk>,
     what any word outside the vocabulary becomes) or, with equal chance, a filler word
-    (`fillers`: filler_word_ids). Names of kinds are never inserted: a name is content, and
-    the Grounder leaves out the names of landmarks the map does not hold. The other half stay
-    clean, so clean instructions keep their weight. `rng` alone draws everything, so
+    (`fillers`: filler_word_ids). Names of kinds are inserted only with `absent_names` (per
+    instruction, absent_name_pools: kinds neither on its map nor named in it; then a third of
+    the words each): a name is content, and the Grounder leaves out the names of landmarks the
+    map does not hold, but the network alone reads them. The other half stay clean, so clean
+    instructions keep their weight. `rng` alone draws everything, so
     data-parallel processes agree.
     """
     lengths = (tokens != PAD).sum(1).tolist()
@@ -283,9 +307,17 @@ def insert_noise_words(
     for i, (row, n) in enumerate(zip(tokens.tolist(), lengths)):
         k = int(rng.integers(1, most + 1)) if rng.random() < 0.5 else 0
         at = int(rng.integers(0, n + 1))
-        words = [
-            UNK if unknown or not len(fillers) else int(fillers[rng.integers(len(fillers))])
-            for unknown in rng.random(k) < 0.5
-        ]
+        if absent_names is None:
+            words = [
+                UNK if unknown or not len(fillers) else int(fillers[rng.integers(len(fillers))])
+                for unknown in rng.random(k) < 0.5
+            ]
+        else:  # a third each: an unknown word, a filler, the name of a kind the map lacks
+            pools = (None, fillers, absent_names[i])
+            words = []
+            for choice in np.minimum((rng.random(k) * 3).astype(int), 2):
+                pool = pools[choice]
+                empty = pool is None or not len(pool)
+                words.append(UNK if empty else int(pool[rng.integers(len(pool))]))
         out[i, :n + k] = torch.tensor(row[:at] + words + row[at:n], dtype=tokens.dtype)
     return out

@@ -20,7 +20,7 @@ import torch.nn.functional as F
 
 from . import distributed
 from ..core.text import Vocabulary
-from ..data.augment import add_distractors, filler_word_ids, insert_noise_words
+from ..data.augment import absent_name_pools, add_distractors, filler_word_ids, insert_noise_words
 from ..data.datasets import GroundingSet
 
 
@@ -112,6 +112,8 @@ class Epochs:
         self.distractor_rng = np.random.default_rng([tc.seed, 1])  # the same in every process
         self.text_noise_rng = np.random.default_rng([tc.seed, 2])
         self.fillers = filler_word_ids(vocab)
+        # each kind's name's word id (-1: not a word of the vocabulary), for noise_names
+        self.name_ids = np.array([vocab.index.get(n, -1) for n in parts[0].entities.names])
 
     def schedule(self, epochs: int):
         """Return a cosine decay from the optimizer's learning rate over `epochs` epochs."""
@@ -151,8 +153,12 @@ class Epochs:
         # uniform average over the words cannot, and noise there cost "closest"
         # (docs/robustness.md)
         if tc.text_noise and (not self.warmup or self.model.attention_on):
+            pools = (
+                absent_name_pools(batch_grids, batch_tokens, self.name_ids)
+                if tc.noise_names else None
+            )
             batch_tokens = insert_noise_words(
-                batch_tokens, self.fillers, tc.text_noise, self.text_noise_rng
+                batch_tokens, self.fillers, tc.text_noise, self.text_noise_rng, pools
             )
         # this process's share (weight 1.0: the whole batch, alone)
         share, weight = distributed.shard(np.arange(len(idx)), processes)

@@ -98,6 +98,12 @@ class TrainConfig:
         low=0,
         high=MAX_K,  # as many as the robustness study inserts
     )
+    noise_names: bool = option(
+        False,
+        'the noise words also name kinds neither on the map nor in the instruction (a third of '
+        "them), as the robustness study's text-noise does: the node's Grounder leaves such "
+        'names out, the network alone reads them',
+    )
     paraphrase: float | None = option(
         None,
         'share of the generated training instructions reworded as people word them '
