@@ -20,6 +20,7 @@ import pytest
 from spatial_grounding_ros import cli
 from spatial_grounding_ros.core.tasks import TASKS
 from spatial_grounding_ros.models.checkpoints import load_checkpoint, PACKAGED_DIR
+from spatial_grounding_ros.shapeworld.reproduce import PAPER_ACC
 from spatial_grounding_ros.studies import bench
 
 REPO = Path(__file__).resolve().parents[1]
@@ -398,6 +399,22 @@ def check_prose(text: str) -> list[str]:
     compare('declined', figures[4:6], [h['declined'] for h in human], same_percent)
     compare('answers exact', figures[6:8], [h['hit_answered'] for h in human], same_percent)
     compare('calibration error', figures[8:9], [honesty['ece']['both']], same_number)
+    # ShapeWorld: results/shapeworld.json (make reproduce-shapeworld)
+    runs = {r['model']: r for r in shapeworld_results()['runs']}
+    rnet, vgg = runs['t-rnet-attn'], runs['t-vgg']
+    figures = said(
+        text,
+        't-RNetAttn reaches {} test accuracy (paper {}; {} on the previous, all-plausible test) '
+        'in {} minutes; t-VGG,',
+    )
+    values = [rnet['test']['acc'], PAPER_ACC['t-rnet-attn'], rnet['test_plausible']['acc'],
+              rnet['train_seconds'] / 60]
+    compare('ShapeWorld t-RNetAttn', figures, values, same_number)
+    figures = said(
+        text, "ImageNet features, {} (paper {}), but {} on the statements false by their relation"
+    )
+    values = [vgg['test']['acc'], PAPER_ACC['t-vgg'], vgg['test']['by_reason']['relation']['acc']]
+    compare('ShapeWorld t-VGG', figures, values, same_number)
     return wrong
 
 
