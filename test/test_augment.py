@@ -14,8 +14,8 @@ from spatial_grounding_ros.core import world
 from spatial_grounding_ros.core.text import PAD, tokenize, UNK, Vocabulary
 from spatial_grounding_ros.data import datasets, generator
 from spatial_grounding_ros.data.augment import (
-    filler_word_ids,
     absent_name_pools,
+    filler_word_ids,
     insert_noise_words,
     mirror,
     SWAP_LEFT_RIGHT,

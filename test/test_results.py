@@ -411,7 +411,7 @@ def check_prose(text: str) -> list[str]:
               rnet['train_seconds'] / 60]
     compare('ShapeWorld t-RNetAttn', figures, values, same_number)
     figures = said(
-        text, "ImageNet features, {} (paper {}), but {} on the statements false by their relation"
+        text, 'ImageNet features, {} (paper {}), but {} on the statements false by their relation'
     )
     values = [vgg['test']['acc'], PAPER_ACC['t-vgg'], vgg['test']['by_reason']['relation']['acc']]
     compare('ShapeWorld t-VGG', figures, values, same_number)

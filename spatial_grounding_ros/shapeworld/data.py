@@ -125,8 +125,9 @@ N_ATTRIBUTES = len(SHAPES) + len(COLOURS) + len(SHAPES) * len(COLOURS)
 
 def scene_attributes(objects: np.ndarray) -> np.ndarray:
     """
-    (N, 5, 5) objects -> (N, N_ATTRIBUTES) float32: which shapes, colours and shape-colour
-    pairs each image holds (8 + 8 + 64), the labels of t-VGG's scene loss.
+    Return which shapes, colours and shape-colour pairs each image holds: t-VGG's scene labels.
+
+    (N, 5, 5) objects -> (N, N_ATTRIBUTES) float32, 8 shapes, 8 colours and 64 pairs.
     """
     n_shapes, n_colours = len(SHAPES), len(COLOURS)
     out = np.zeros((len(objects), N_ATTRIBUTES), np.float32)

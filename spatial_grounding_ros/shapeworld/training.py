@@ -26,7 +26,14 @@ import torch.nn.functional as F
 from tqdm import tqdm
 
 from .data import (
-    ABSENT, converse, image_noise, load_split, REASONS, scene_attributes, ShapeWorldSet, text_noise,
+    ABSENT,
+    converse,
+    image_noise,
+    load_split,
+    REASONS,
+    scene_attributes,
+    ShapeWorldSet,
+    text_noise,
 )
 from .models import build_model, MODELS, ShapeWorldConfig
 from ..core.text import Vocabulary
