@@ -283,6 +283,48 @@ def test_shapeworld_docs_page_shows_the_noise_table():
     assert '(docs/shapeworld.md)' in readme_section('Results')
 
 
+def test_shapeworld_docs_page_figures_are_the_json():
+    """docs/shapeworld.md's results table and the figures its prose states about it."""
+    docs = (REPO / 'docs' / 'shapeworld.md').read_text()
+    [expected] = tables((RESULTS / 'shapeworld.md').read_text())
+    assert expected in tables(docs)
+    results = shapeworld_results()
+    rnet, vgg = ({r['model']: r for r in results['runs']}[m] for m in ('t-rnet-attn', 't-vgg'))
+    noise = {(e['noise'], int(e['k']), e['model']): e['acc'] for e in results['noise']}
+    checks = {
+        '**Both meet the minimum: t-RNetAttn {} on the 500 test statements (paper {}; {} on the '
+        'previous, all-plausible test split), t-VGG {} (paper {};': [
+            rnet['test']['acc'], PAPER_ACC['t-rnet-attn'], rnet['test_plausible']['acc'],
+            vgg['test']['acc'], PAPER_ACC['t-vgg'],
+        ],
+        't-RNetAttn trained in {} minutes ({} s;': [
+            rnet['train_seconds'] / 60, rnet['train_seconds']
+        ],
+        't-VGG trained in {} minutes ({} s)': [vgg['train_seconds'] / 60, vgg['train_seconds']],
+        'Its hard part is the absent object: {} on the statements without their subject and {} '
+        'on the': [rnet['test']['by_reason'][r]['acc'] for r in ('subject', 'reference')],
+        'against {} on the false-by-relation ones and {} on the true ones': [
+            rnet['test']['by_reason'][r]['acc'] for r in ('relation', 'true')
+        ],
+        '{} and {} on the statements without their subject or reference, {} on the true ones, '
+        'but {} on those false by their relation': [
+            vgg['test']['by_reason'][r]['acc']
+            for r in ('subject', 'reference', 'true', 'relation')
+        ],
+        'and {} on the all-plausible split, chance': [vgg['test_plausible']['acc']],
+        '({} with one word, {} with ten)': [
+            noise['text', k, 't-rnet-attn'] for k in (1, 10)
+        ],
+        't-VGG loses more to patches ({} to {} at k = 10': [
+            noise['image', 0, 't-vgg'], noise['image', 10, 't-vgg']
+        ],
+        'less to words ({} at k = 10)': [noise['text', 10, 't-vgg']],
+    }
+    for sentence, values in checks.items():
+        for figure, value in zip(said(docs, sentence), values, strict=True):
+            assert same_number(figure, value), (sentence, figure, value)
+
+
 @pytest.mark.parametrize('run', shapeworld_results()['runs'], ids=lambda r: r['model'])
 def test_shipped_shapeworld_checkpoint_evaluates_to_its_row(run, tmp_path_factory, capsys):
     """
