@@ -289,6 +289,23 @@ def test_relation_scores_each_pair_at_its_offset():
     assert offsets[9, 17].tolist() == pytest.approx([0, 1 / 7])
 
 
+def fit(model, loss_fn, steps: int = 12) -> list[float]:
+    """
+    Take `steps` Adam steps on loss_fn(); return each step's loss.
+
+    On eight examples: memorising them is enough to see a model learn.
+    """
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+    losses = []
+    for _ in range(steps):
+        loss = loss_fn()
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    return losses
+
+
 def test_scene_attributes_by_hand():
     """Which shapes, colours and shape-colour pairs an image holds: t-VGG's scene labels."""
     square, circle = sw.SHAPES.index('square'), sw.SHAPES.index('circle')
@@ -318,15 +335,9 @@ def test_vgg_reads_the_scene_and_the_scene_loss_trains_it(data):
     model = build_model('t-vgg', ShapeWorldConfig(vocab_size=len(vocab)))
     x, t = as_input(data.images[:8]), encode(vocab, data.statements[:8])
     scene = torch.from_numpy(sw.scene_attributes(data.objects[:8]))
-    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
-    losses = []
-    for _ in range(12):
-        _, aux = model(x, t, return_aux=True)
-        loss = F.binary_cross_entropy_with_logits(aux['scene'], scene)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(loss.item())
+    losses = fit(model, lambda: F.binary_cross_entropy_with_logits(
+        model(x, t, return_aux=True)[1]['scene'], scene
+    ))
     assert losses[-1] < 0.8 * losses[0], losses
     # the scene is the image's: the statement does not change it
     _, a = model(x, t, return_aux=True)
@@ -341,14 +352,7 @@ def test_model_trains_and_its_loss_falls(name, data):
     model = build_model(name, ShapeWorldConfig(vocab_size=len(vocab)))
     x, t = as_input(data.images[:8]), encode(vocab, data.statements[:8])
     y = torch.from_numpy(data.labels[:8])
-    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
-    losses = []
-    for _ in range(12):  # eight examples: memorising them is enough to see it learn
-        loss = F.cross_entropy(model(x, t), y)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(loss.item())
+    losses = fit(model, lambda: F.cross_entropy(model(x, t), y))
     assert losses[-1] < 0.8 * losses[0], losses
     logits, aux = model(x, t, return_aux=True)
     assert logits.shape == (8, 2)
