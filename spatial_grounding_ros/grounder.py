@@ -196,8 +196,9 @@ class Grounder:
         # calibration: confidence is the softmax of the values at this temperature
         self.temperature = float(loaded.header.get('calibration', {}).get('temperature', 1.0))
         self.model.eval()
-        # instruction -> (its words for the model, text code); least recently used first
-        self.text_codes: OrderedDict[str, tuple[str, TextCode, TextCode]] = OrderedDict()
+        # instruction -> (its words for the model, {images: text code}); least recently used
+        # first
+        self.text_codes: OrderedDict[str, tuple[str, dict]] = OrderedDict()
 
     @classmethod
     def from_checkpoint(
@@ -255,23 +256,28 @@ class Grounder:
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
     @torch.no_grad()
-    def text_code(self, instruction: str) -> tuple[str, TextCode, TextCode]:
+    def text_code(self, instruction: str, images: tuple = IMAGES) -> tuple[str, TextCode]:
         """
-        Return what the model reads of an instruction (reword) and its text codes.
+        Return what the model reads of an instruction (reword) and its text code for `images`.
 
-        The second code holds it as said of each image of the map (IMAGES: the first is the
-        instruction as it is). All are computed once while the instruction is in use.
+        The code holds the instruction as said of each image of the map (IMAGES: the first is
+        the instruction as it is; large maps take IMAGES[:1]). Each is computed once, when a
+        map first needs it, while the instruction is in use.
         """
-        coded = self.text_codes.pop(instruction, None)
-        if coded is None:
-            words = self.reword(instruction)
-            said = [mirror_instruction(words, axes) for axes in IMAGES]
-            tokens = torch.as_tensor(self.vocab.encode_batch(said))
-            coded = words, self.model.text_code(tokens[:1]), self.model.text_code(tokens)
+        cached = self.text_codes.pop(instruction, None)
+        if cached is None:
+            cached = self.reword(instruction), {}
             if len(self.text_codes) >= self.cached_instructions:
                 self.text_codes.popitem(last=False)
-        self.text_codes[instruction] = coded
-        return coded
+        self.text_codes[instruction] = cached
+        words, codes = cached
+        if images not in codes:
+            # encoded as a batch of all the images' wordings, so that the first image's tokens
+            # carry the same padding whichever images a map takes
+            said = [mirror_instruction(words, axes) for axes in IMAGES]
+            tokens = torch.as_tensor(self.vocab.encode_batch(said))
+            codes[images] = self.model.text_code(tokens[: len(images)])
+        return words, codes[images]
 
     @torch.no_grad()
     def ground(
@@ -297,11 +303,9 @@ class Grounder:
         else:
             model_text = distances.model_text
             model_grid, mentions = grid, self.lexicon.mentions(tokenize(model_text))
-        model_text, code, imaged_code = self.text_code(model_text)
         images = IMAGES if model_grid.size <= self.mirror_average_cells else IMAGES[:1]
-        values, aux = self.model.ground(
-            imaged(model_grid, images), imaged_code if len(images) > 1 else code, True
-        )
+        model_text, code = self.text_code(model_text, images)
+        values, aux = self.model.ground(imaged(model_grid, images), code, True)
         values = shifted(averaged(values.numpy(), images), distances.extra)
         best, confidence, alternatives = self.judge(values)
         reason = structural_reason(self.entities, grid, *reworded(words, mentions), self.known)
