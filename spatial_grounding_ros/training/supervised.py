@@ -78,6 +78,12 @@ class TrainConfig:
         "the task's)",
         low=0,
     )
+    generator_mode: str | None = option(
+        None,
+        "the generated worlds' mix of families, training and validation (data/generator.py "
+        "MODES; default: the task's)",
+        choices=tuple(MODES),
+    )
     world_instructions: bool | None = option(
         None, "add the training worlds' synthetic pickle instructions (default: the task's)"
     )
@@ -205,7 +211,7 @@ def training_parts(
             count = int(round(tc.synthetic * share))
             if count:
                 seed = 10_000 + 100 * tc.seed + n
-                generated = generate(count, seed=seed, mode=task.generator_mode, size=size)
+                generated = generate(count, seed=seed, mode=tc.generator_mode, size=size)
                 parts.append(paraphrased(generated, tc.paraphrase or 0.0, seed))
     # one set per map size, so that a batch holds maps of one size
     by_size: dict[tuple, list[GroundingSet]] = {}
@@ -215,14 +221,12 @@ def training_parts(
 
 
 def generated_validation(
-    task: tasks.Task, seed: int, per_family: int = 40
+    mode: str | None, seed: int, per_family: int = 40
 ) -> GroundingSet | None:
-    """Fresh generated worlds (never trained on) of every family the task trains on."""
-    if task.generator_mode is None:
+    """Fresh generated worlds (never trained on) of every family of generator mode `mode`."""
+    if mode is None:
         return None
-    return generate(
-        per_family * len(MODES[task.generator_mode]), seed=20_000 + seed, mode=task.generator_mode
-    )
+    return generate(per_family * len(MODES[mode]), seed=20_000 + seed, mode=mode)
 
 
 def task_training_config(
@@ -241,7 +245,7 @@ def task_training_config(
             )
         tc = replace(tc, distractors=0)
     tc = tc.for_task(task.name, model_name)
-    if tc.synthetic and task.generator_mode is None:
+    if tc.synthetic and tc.generator_mode is None:
         raise ValueError(
             f'--synthetic adds generated PuddleWorld worlds; task {task.name} is not PuddleWorld'
         )
@@ -347,7 +351,7 @@ def train_supervised(
     data = train_data if train_data is not None else load_task(task, 'train', data_dir)
     train, val = split_by_world(data, tc.val_fraction, tc.seed)
     parts = training_parts(settings, train, val, tc, data_dir)
-    val_generated = generated_validation(settings, tc.seed) if tc.synthetic else None
+    val_generated = generated_validation(tc.generator_mode, tc.seed) if tc.synthetic else None
     # from everything trained on: generated phrasing and the mirrors' swapped direction words
     vocab = Vocabulary.build(list(data.instructions) + [t for p in parts for t in p.instructions])
     cfg = model_config(settings, supports, tc, data, vocab, model_options)
