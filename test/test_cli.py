@@ -191,6 +191,7 @@ def test_train_options_are_the_config_fields():
         distractors=TASKS['pw'].distractors,
         text_noise=TASKS['pw'].text_noise,
         paraphrase=TASKS['pw'].paraphrase,
+        generator_mode=TASKS['pw'].generator_mode,
     )
     # the paper's baselines have a recipe of their own: MSE alone, no distractor objects
     baseline = TrainConfig().for_task('pw-local', 't-cnn')
@@ -203,6 +204,9 @@ def test_train_options_are_the_config_fields():
     assert given == {'mirrors': False, 'epochs': 7, 'batch_size': 8, 'select': 'mse'}
     # a value given wins over the task's
     assert TrainConfig(**given).for_task('pw', 't-cnn').epochs == 7
+    args = build_parser().parse_args(base + ['--generator-mode', 'training-row-col'])
+    mixed = TrainConfig(**given_options(TrainConfig, args)).for_task('pw', 't-cnn')
+    assert mixed.generator_mode == 'training-row-col'
     assert all(f.metadata['help'] for f in fields(TrainConfig))
     with pytest.raises(ValueError, match='batch_size must be at least 1, got 0'):
         TrainConfig(batch_size=0)

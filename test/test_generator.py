@@ -165,6 +165,16 @@ def test_the_defaults_mix_puts_objects_beside_offset_goals_without_moving_them()
     assert rates['training'] > rates['mixed'] + 0.1, rates
 
 
+def test_the_row_col_mix_is_the_training_mix_with_row_col_more_often():
+    """'training-row-col' (train --generator-mode): every family, row-col 6 of 16 turns."""
+    mix = generator.MODES['training-row-col']
+    assert set(mix) == set(generator.FAMILIES) and len(mix) == 16
+    data = generator.generate(320, seed=3, mode='training-row-col')
+    families = [generator.family_of(w) for w in data.worlds]
+    assert families.count('row-col') == 120 and families.count('closest') == 40
+    assert generator.BESIDE_GOAL['training-row-col'] == generator.BESIDE_GOAL['training']
+
+
 def test_unique_objects_occur_once_and_objects_scale_with_area():
     """Dense maps have Janner's 8 objects per 100 cells; some maps are sparse or puddle-free."""
     rng = np.random.default_rng(0)
