@@ -104,11 +104,11 @@ class TrainConfig:
         low=0,
         high=MAX_K,  # as many as the robustness study inserts
     )
-    noise_names: bool = option(
-        False,
+    noise_names: bool | None = option(
+        None,
         'the noise words also name kinds neither on the map nor in the instruction (a third of '
         "them), as the robustness study's text-noise does: the node's Grounder leaves such "
-        'names out, the network alone reads them',
+        "names out, the network alone reads them (default: the task's recipe's, or off)",
     )
     paraphrase: float | None = option(
         None,
