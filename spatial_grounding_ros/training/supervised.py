@@ -154,7 +154,7 @@ class TrainConfig:
         return replace(
             self,
             **{
-                f.name: own.get(f.name, getattr(settings, f.name))
+                f.name: own[f.name] if f.name in own else getattr(settings, f.name)
                 for f in fields(self)
                 if getattr(self, f.name) is None and (f.name in own or hasattr(settings, f.name))
             },
