@@ -212,6 +212,15 @@ def test_train_options_are_the_config_fields():
         TrainConfig(batch_size=0)
 
 
+@pytest.mark.parametrize('option', [['--synthetic', '10'], ['--generator-mode', 'training']])
+def test_generated_worlds_are_refused_on_a_task_that_is_not_puddleworld(option):
+    r = run('train', '--task', 'isi', '--model', 't-rnet', '--epochs', '1', *option)
+    assert_one_line_error(
+        r, '--synthetic and --generator-mode add generated PuddleWorld worlds; task isi is not '
+        'PuddleWorld'
+    )
+
+
 def test_shapeworld_train_refuses_the_grid_options():
     r = run('shapeworld-train', '--model', 't-vgg', '--synthetic', '10')
     assert_one_line_error(r, 'unrecognized arguments: --synthetic 10')

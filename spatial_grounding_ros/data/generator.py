@@ -86,7 +86,7 @@ MODES = {
 # goal. On sparse maps an object there is rare by chance, and a default trained without these
 # sent "two below the rock" with a tree beside the target three below (test_behaviour.py,
 # "an object beside the goal"); only the default's mix has them, the paper's tasks keep Janner's.
-BESIDE_GOAL = {'training': 0.3, 'training-row-col': 0.3}
+BESIDE_GOAL = {mode: 0.3 for mode in ('training', 'training-row-col')}
 
 
 def local_phrase(offset: tuple[int, int], name: str) -> str:

@@ -245,9 +245,11 @@ def task_training_config(
             )
         tc = replace(tc, distractors=0)
     tc = tc.for_task(task.name, model_name)
-    if tc.synthetic and tc.generator_mode is None:
+    # a mode given to a task without one (ISI) would generate PuddleWorld worlds for it
+    if task.generator_mode is None and (tc.synthetic or tc.generator_mode):
         raise ValueError(
-            f'--synthetic adds generated PuddleWorld worlds; task {task.name} is not PuddleWorld'
+            '--synthetic and --generator-mode add generated PuddleWorld worlds; task '
+            f'{task.name} is not PuddleWorld'
         )
     return tc
 
