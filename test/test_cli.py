@@ -212,12 +212,14 @@ def test_train_options_are_the_config_fields():
         TrainConfig(batch_size=0)
 
 
-@pytest.mark.parametrize('option', [['--synthetic', '10'], ['--generator-mode', 'training']])
+@pytest.mark.parametrize(
+    'option', [['--synthetic', '10'], ['--generator-mode', 'training'], ['--late-row-col', '10']]
+)
 def test_generated_worlds_are_refused_on_a_task_that_is_not_puddleworld(option):
     r = run('train', '--task', 'isi', '--model', 't-rnet', '--epochs', '1', *option)
     assert_one_line_error(
-        r, '--synthetic and --generator-mode add generated PuddleWorld worlds; task isi is not '
-        'PuddleWorld'
+        r, '--synthetic, --generator-mode and --late-row-col add generated PuddleWorld worlds; '
+        'task isi is not PuddleWorld'
     )
 
 

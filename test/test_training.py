@@ -240,6 +240,38 @@ def test_text_noise_waits_for_the_attention():
     assert sum(unknown[True]) >= 2  # with the attention: noise (half the instructions)
 
 
+def test_late_row_col_worlds_join_at_the_late_epoch():
+    """
+    --late-row-col: generated row-col worlds, every map size, read from --late-from on only.
+
+    Row-col through the whole run cost the human global split (docs/landmarks.md).
+    """
+    from spatial_grounding_ros.core.text import Vocabulary
+    from spatial_grounding_ros.training.distributed import Group
+    from spatial_grounding_ros.training.epochs import Epochs
+    from spatial_grounding_ros.training.supervised import late_parts
+
+    late = late_parts(TrainConfig(late_row_col=200, seed=0))
+    assert [p.grids.shape[1] for p in late] == [10, 16, 24]
+    assert [len(p) for p in late] == [150, 34, 16]
+    assert all(' and ' in t for p in late for t in p.instructions)  # a row and a column
+    assert late_parts(TrainConfig()) == []
+    data = generate(64, seed=8, mode='local')
+    vocab = Vocabulary.build(data.instructions + [t for p in late for t in p.instructions])
+    cfg = ModelConfig(n_entities=len(data.entities), vocab_size=len(vocab))
+    model = build_model('t-cnn', cfg)
+    sizes = {False: set(), True: set()}  # epoch >= 1 -> the map sizes its batches held
+    epoch = [0]
+    model.register_forward_pre_hook(
+        lambda m, inputs: sizes[epoch[0] >= 1].add(inputs[0].shape[-1])
+    )
+    run = Epochs(model, [data, *late], vocab, replace(one_epoch(), epochs=2), Group(), (1, 1))
+    run.run(0)
+    epoch[0] = 1
+    run.run(1)
+    assert sizes == {False: {10}, True: {10, 16, 24}}
+
+
 def test_init_starts_from_a_checkpoints_weights_and_refuses_another_config():
     import torch
 

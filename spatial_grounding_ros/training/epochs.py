@@ -77,8 +77,11 @@ class Epochs:
         vocab: Vocabulary,
         tc,
         processes: distributed.Group,
+        late: tuple[int, int] | None = None,
     ):
         self.model, self.tc, self.processes = model, tc, processes
+        # parts from index late[0] on train from epoch late[1] on (TrainConfig.late_row_col)
+        self.late = late or (len(parts), 0)
         # log of the goal logits' temperature; learned, it lets the cross-entropy ask for the
         # right argmax without pulling the values away from the MSE's (not part of the model)
         self.goal_log_scale = torch.tensor(
@@ -100,6 +103,7 @@ class Epochs:
                     (tokens != 0).sum(1).numpy(),
                 )
             )
+        # late parts too, in every epoch: the measured --late-row-col runs' schedule
         self.steps_per_epoch = sum(int(np.ceil(len(p) / tc.batch_size)) for p in parts)
         # attention starts uniform (its weights 0): until warmup, the attention-free forward
         self.warmup = (
@@ -130,10 +134,12 @@ class Epochs:
                 for group in self.opt.param_groups:
                     group['lr'] = self.tc.lr
                 self.sched = self.schedule(self.tc.epochs - self.warmup)
+        first_late, late_epoch = self.late
         plan = [
             (p, idx)
             for p, (*_, lengths) in enumerate(self.encoded)
             for idx in batches(lengths, self.tc.batch_size, self.rng)
+            if p < first_late or epoch >= late_epoch
         ]
         losses = [self.step(*plan[p]) for p in self.rng.permutation(len(plan))]
         return float(np.mean(distributed.batch_losses(losses, self.processes)))

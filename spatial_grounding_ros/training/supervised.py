@@ -46,6 +46,8 @@ from ..models.registry import build_model, capabilities
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
 SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
+# share of epochs before a run's --late-row-col worlds join, by default
+LATE_FROM = 0.75
 
 
 @dataclass
@@ -109,6 +111,19 @@ class TrainConfig:
         'the noise words also name kinds neither on the map nor in the instruction (a third of '
         "them), as the robustness study's text-noise does: the node's Grounder leaves such "
         "names out, the network alone reads them (default: the task's recipe's, or off)",
+    )
+    late_row_col: int | None = option(
+        None,
+        'generated row-col worlds added to training for its last epochs only (from '
+        '--late-from): row-col in the whole run cost the human global split (docs/landmarks.md) '
+        "(default: the task's recipe's, or none)",
+        low=0,
+    )
+    late_from: float | None = option(
+        None,
+        f'share of epochs before the --late-row-col worlds join (default: {LATE_FROM})',
+        low=0.0,
+        high=1.0,
     )
     paraphrase: float | None = option(
         None,
@@ -217,7 +232,25 @@ def training_parts(
     by_size: dict[tuple, list[GroundingSet]] = {}
     for part in parts:
         by_size.setdefault(part.grids.shape[1:], []).append(part)
-    return [GroundingSet.concat(task.name, group) for group in by_size.values()]
+    return [GroundingSet.concat(task.name, group) for group in by_size.values()] + late_parts(tc)
+
+
+def late_sizes(tc: TrainConfig) -> list[tuple[int, int, int]]:
+    """Return (n, map size, count) of each map size's late row-col worlds (tc.late_row_col)."""
+    counts = [
+        (n, size, int(round((tc.late_row_col or 0) * share)))
+        for n, (size, share) in enumerate(SYNTHETIC_SIZES)
+    ]
+    return [(n, size, count) for n, size, count in counts if count]
+
+
+def late_parts(tc: TrainConfig) -> list[GroundingSet]:
+    """Return the generated row-col worlds of `tc.late_row_col`, one set per map size."""
+    return [
+        generate(count, seed=30_000 + 100 * tc.seed + n, mode='training', size=size,
+                 families=('row-col',))
+        for n, size, count in late_sizes(tc)
+    ]
 
 
 def generated_validation(
@@ -246,10 +279,10 @@ def task_training_config(
         tc = replace(tc, distractors=0)
     tc = tc.for_task(task.name, model_name)
     # a mode given to a task without one (ISI) would generate PuddleWorld worlds for it
-    if task.generator_mode is None and (tc.synthetic or tc.generator_mode):
+    if task.generator_mode is None and (tc.synthetic or tc.generator_mode or tc.late_row_col):
         raise ValueError(
-            '--synthetic and --generator-mode add generated PuddleWorld worlds; task '
-            f'{task.name} is not PuddleWorld'
+            '--synthetic, --generator-mode and --late-row-col add generated PuddleWorld '
+            f'worlds; task {task.name} is not PuddleWorld'
         )
     return tc
 
@@ -361,7 +394,10 @@ def train_supervised(
     if tc.init:
         start_from(model, cfg, vocab, tc.init)
     processes = distributed.start()
-    epochs = Epochs(model, parts, vocab, tc, processes)
+    # the late row-col worlds are the last parts: they join at epoch late_from * epochs
+    late_from = LATE_FROM if tc.late_from is None else tc.late_from
+    late = (len(parts) - len(late_sizes(tc)), int(tc.epochs * late_from))
+    epochs = Epochs(model, parts, vocab, tc, processes, late)
     start = time.perf_counter()
     bar = tqdm(
         range(tc.epochs),
