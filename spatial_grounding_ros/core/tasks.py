@@ -140,7 +140,9 @@ TASKS = {
             pw_modes=('local', 'global'),
             generator_mode='training',
             **_PW,
-            recipes=_baselines(),
+            # t-RNetAttn: more row-col worlds for the last quarter of its epochs, and names of
+            # absent kinds among its noise words (docs/landmarks.md, "Row-col: the misses")
+            recipes={**_baselines(), 't-rnet-attn': {'late_row_col': 7200, 'noise_names': True}},
             # the default's far relation scores any kind in reach, so it must learn to pass
             # over objects it does not know (docs/robustness.md)
             distractors=10,
