@@ -259,6 +259,10 @@ def add_distractors(
     return grids
 
 
+# share of the training instructions that get noise words, by default: the rest stay clean
+NOISE_SHARE = 0.5
+
+
 def filler_word_ids(vocab: Vocabulary) -> np.ndarray:
     """Return the ids of the filler words training inserts: noise.VERBS and noise.ARTICLES."""
     return np.array([vocab.index[w] for w in (*VERBS, *ARTICLES) if w in vocab.index])
@@ -288,9 +292,11 @@ def insert_noise_words(
     most: int,
     rng: np.random.Generator,
     absent_names: list[np.ndarray] | None = None,
+    unknown: bool = True,
+    share: float = NOISE_SHARE,
 ) -> torch.Tensor:
     """
-    Insert noise words into half the instructions of a batch; return the new (B, L') tokens.
+    Insert noise words into a `share` of a batch's instructions; return the new (B, L') tokens.
 
     The textual counterpart of add_distractors: an instruction chosen gets 1..`most` words at
     one random position, as the robustness study inserts them, each an unknown word (<unk>,
@@ -298,24 +304,26 @@ def insert_noise_words(
     (`fillers`: filler_word_ids). Names of kinds are inserted only with `absent_names` (per
     instruction, absent_name_pools: kinds neither on its map nor named in it; then a third of
     the words each): a name is content, and the Grounder leaves out the names of landmarks the
-    map does not hold, but the network alone reads them. The other half stay clean, so clean
-    instructions keep their weight. `rng` alone draws everything, so
-    data-parallel processes agree.
+    map does not hold, but the network alone reads them. Without `unknown` (a model that skips
+    unknown words, for which one is no noise at all) the words are fillers and names, half
+    each. The rest stay clean, so clean instructions keep their weight. `rng` alone draws
+    everything, so data-parallel processes agree.
     """
     lengths = (tokens != PAD).sum(1).tolist()
     out = torch.full((len(tokens), tokens.shape[1] + most), PAD, dtype=tokens.dtype)
     for i, (row, n) in enumerate(zip(tokens.tolist(), lengths)):
-        k = int(rng.integers(1, most + 1)) if rng.random() < 0.5 else 0
+        k = int(rng.integers(1, most + 1)) if rng.random() < share else 0
         at = int(rng.integers(0, n + 1))
         if absent_names is None:
             words = [
-                UNK if unknown or not len(fillers) else int(fillers[rng.integers(len(fillers))])
-                for unknown in rng.random(k) < 0.5
+                UNK if (unknown and draw) or not len(fillers)
+                else int(fillers[rng.integers(len(fillers))])
+                for draw in rng.random(k) < 0.5
             ]
         else:  # a third each: an unknown word, a filler, the name of a kind the map lacks
-            pools = (None, fillers, absent_names[i])
+            pools = (None, fillers, absent_names[i])[0 if unknown else 1:]
             words = []
-            for choice in np.minimum((rng.random(k) * 3).astype(int), 2):
+            for choice in np.minimum((rng.random(k) * len(pools)).astype(int), len(pools) - 1):
                 pool = pools[choice]
                 empty = pool is None or not len(pool)
                 words.append(UNK if empty else int(pool[rng.integers(len(pool))]))

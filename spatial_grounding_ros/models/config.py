@@ -67,6 +67,9 @@ class ModelConfig:
     # kinds after those whose embeddings training redraws at every step: its distractor objects
     # (TrainConfig.distractors), so a model learns to pass over things it does not know
     distractor_kinds: int = 0
+    # the text encoder reads past words outside its vocabulary (<unk>): the LSTM runs over the
+    # known words alone, so an unknown word cannot move the goal
+    skip_unknown: bool = False
 
     # fields added after checkpoints were shipped, with the value those checkpoints had
     LATER_FIELDS = {
@@ -76,6 +79,7 @@ class ModelConfig:
         'head_text': False,
         'far': False,
         'distractor_kinds': 0,
+        'skip_unknown': False,
     }
 
     def to_dict(self) -> dict:

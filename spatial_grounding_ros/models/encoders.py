@@ -16,21 +16,37 @@ from torch import nn
 import torch.nn.functional as F
 
 from .config import ModelConfig, neighbour_offsets
-from ..core.text import PAD
+from ..core.text import PAD, UNK
 
 
 class TextEncoder(nn.Module):
-    """Word embedding -> LSTM; per-word outputs h(k), the padding mask, and their mean."""
+    """
+    Word embedding -> LSTM; per-word outputs h(k), the mask of words read, and their mean.
+
+    With cfg.skip_unknown the LSTM runs over the known words alone, packed to the front, and
+    each output goes back to its word's place: an unknown word (<unk>) gets no output and no
+    attention, and the words around it read as if it were not there.
+    """
 
     def __init__(self, cfg: ModelConfig):
         super().__init__()
         self.embed = nn.Embedding(cfg.vocab_size, cfg.word_dim, padding_idx=PAD)
         self.lstm = nn.LSTM(cfg.word_dim, cfg.hidden, batch_first=True)
+        self.skip_unknown = cfg.skip_unknown
 
     def forward(self, tokens: torch.Tensor):
         mask = tokens != PAD
-        mask[:, 0] = True  # an empty instruction still has one (unknown) word
-        words, _ = self.lstm(self.embed(tokens))
+        if not self.skip_unknown:
+            mask[:, 0] = True  # an empty instruction still has one (unknown) word
+            words, _ = self.lstm(self.embed(tokens))
+        else:
+            mask &= tokens != UNK
+            mask[:, 0] |= ~mask.any(1)  # nothing known: its first word is read
+            # the words read first, in their order; the rest become padding after them
+            order = torch.argsort((~mask).to(torch.uint8), dim=1, stable=True)
+            packed = tokens.gather(1, order).masked_fill(~mask.gather(1, order), PAD)
+            read, _ = self.lstm(self.embed(packed))
+            words = torch.zeros_like(read).scatter(1, order[..., None].expand_as(read), read)
         words = words * mask.unsqueeze(-1)
         mean = words.sum(1) / mask.sum(1, keepdim=True)
         return words, mask, mean

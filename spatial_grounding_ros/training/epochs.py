@@ -20,7 +20,13 @@ import torch.nn.functional as F
 
 from . import distributed
 from ..core.text import Vocabulary
-from ..data.augment import absent_name_pools, add_distractors, filler_word_ids, insert_noise_words
+from ..data.augment import (
+    absent_name_pools,
+    add_distractors,
+    filler_word_ids,
+    insert_noise_words,
+    NOISE_SHARE,
+)
 from ..data.datasets import GroundingSet
 
 
@@ -164,7 +170,13 @@ class Epochs:
                 if tc.noise_names else None
             )
             batch_tokens = insert_noise_words(
-                batch_tokens, self.fillers, tc.text_noise, self.text_noise_rng, pools
+                batch_tokens,
+                self.fillers,
+                tc.text_noise,
+                self.text_noise_rng,
+                pools,
+                unknown=not self.model.cfg.skip_unknown,
+                share=NOISE_SHARE if tc.noise_share is None else tc.noise_share,
             )
         # this process's share (weight 1.0: the whole batch, alone)
         share, weight = distributed.shard(np.arange(len(idx)), processes)

@@ -27,7 +27,7 @@ from .epochs import Epochs, trim_padding
 from .options import check, option
 from ..core import tasks, world
 from ..core.text import Vocabulary
-from ..data.augment import with_mirrors
+from ..data.augment import NOISE_SHARE, with_mirrors
 from ..data.datasets import (
     GroundingSet,
     load_task,
@@ -111,6 +111,17 @@ class TrainConfig:
         'the noise words also name kinds neither on the map nor in the instruction (a third of '
         "them), as the robustness study's text-noise does: the node's Grounder leaves such "
         "names out, the network alone reads them (default: the task's recipe's, or off)",
+    )
+    skip_unknown: bool | None = option(
+        None,
+        'the model reads past words outside its vocabulary (ModelConfig.skip_unknown), and the '
+        "noise words are fillers and names alone (default: the task's recipe's, or off)",
+    )
+    noise_share: float | None = option(
+        None,
+        f'share of the training instructions that get noise words (default: {NOISE_SHARE})',
+        low=0.0,
+        high=1.0,
     )
     late_row_col: int | None = option(
         None,
@@ -299,6 +310,8 @@ def model_config(
     model_options = {**({} if tc.paper_model else task.model), **model_options}
     if tc.distractors:
         model_options['distractor_kinds'] = tc.distractors
+    if tc.skip_unknown:
+        model_options['skip_unknown'] = True
     if not supports.far_relation:  # the far relation is a relation network's
         model_options.pop('far', None)
     return ModelConfig(
