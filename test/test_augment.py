@@ -194,3 +194,24 @@ def test_noise_names_insert_only_names_of_absent_kinds():
                 kinds['name'] += 1
     total = sum(kinds.values())
     assert all(n > total / 5 for n in kinds.values()), kinds  # about a third each
+
+
+def test_noise_for_a_model_that_skips_unknown_words_is_fillers_and_names():
+    """Without `unknown` no <unk> is inserted (it would be no noise); `share` sets how many."""
+    data = generator.generate(200, seed=5, mode='local')
+    vocab = Vocabulary.build(data.instructions)
+    fillers = filler_word_ids(vocab)
+    name_ids = np.array([vocab.index.get(n, -1) for n in data.entities.names])
+    tokens = torch.from_numpy(vocab.encode_batch(data.instructions))
+    pools = absent_name_pools(torch.from_numpy(data.grids), tokens, name_ids)
+    for names in (None, pools):
+        noisy = insert_noise_words(
+            tokens, fillers, 6, np.random.default_rng(0), names, unknown=False, share=0.9
+        )
+        added = (noisy != PAD).sum(1) - (tokens != PAD).sum(1)
+        # <unk> only where a map holds every named kind: no name left to insert
+        lacking = [i for i, pool in enumerate(names or []) if not len(pool)]
+        assert set(torch.nonzero(noisy == UNK)[:, 0].tolist()) <= set(lacking)
+        assert 160 < (added > 0).sum() < 200  # about 9 in 10 get noise
+    inserted = noisy[(noisy != PAD) & ~torch.isin(noisy, tokens)]
+    assert torch.isin(inserted, torch.from_numpy(fillers)).float().mean() < 0.75  # names too

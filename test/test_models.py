@@ -368,3 +368,37 @@ def test_squared_distances_to_the_nearest_mark_within_reach(shape):
             near = (abs(rows - r) <= reach) & (abs(cols - c) <= reach)
             want = np.where(near, np.minimum(want, (rows - r) ** 2 + (cols - c) ** 2), want)
         assert np.array_equal(np.minimum(got[index], FAR_BEYOND), want)
+
+
+@pytest.mark.parametrize('reference', [False, True])
+def test_skip_unknown_reads_past_unknown_words(reference):
+    """With skip_unknown, <unk> anywhere in an instruction leaves the value map as it was."""
+    torch.manual_seed(0)
+    cfg = ModelConfig(vocab_size=9, skip_unknown=True, far=True, head_text=True)
+    model = build_model('t-rnet-attn', cfg).eval()
+    with torch.no_grad():  # attention that is not uniform, so a word's place matters
+        model.attn.weight.normal_()
+    grids = torch.randint(0, 12, (3, 6, 7))
+    clean = torch.tensor([[4, 5, 6, 7, 0, 0, 0], [8, 2, 0, 0, 0, 0, 0], [3, 0, 0, 0, 0, 0, 0]])
+    noisy = torch.tensor([[1, 4, 5, 1, 1, 6, 7], [8, 2, 1, 0, 0, 0, 0], [1, 1, 3, 0, 0, 0, 0]])
+    with torch.no_grad():
+        before, aux_before = model(grids, clean, return_aux=True, reference=reference)
+        after, aux_after = model(grids, noisy, return_aux=True, reference=reference)
+    torch.testing.assert_close(after, before, atol=1e-6, rtol=1e-5)
+    attention = aux_after['attention']
+    assert attention[noisy == 1].abs().max() == 0  # none on the unknown words
+    torch.testing.assert_close(attention[noisy > 1], aux_before['attention'][clean > 1])
+    # without it, the same weights read <unk> as a word: the map moves
+    model.text.skip_unknown = False
+    with torch.no_grad():
+        assert not torch.allclose(model(grids, noisy, reference=reference), before, atol=1e-4)
+
+
+def test_skip_unknown_reads_an_all_unknown_instruction_as_one_word():
+    torch.manual_seed(0)
+    model = build_model('t-rnet-attn', ModelConfig(vocab_size=9, skip_unknown=True)).eval()
+    grids = torch.randint(0, 12, (1, 5, 5)).expand(2, -1, -1)
+    with torch.no_grad():
+        values = model(grids, torch.tensor([[1, 1, 1], [1, 0, 0]]))
+    assert torch.isfinite(values).all()
+    torch.testing.assert_close(values[0], values[1])  # both read one <unk>

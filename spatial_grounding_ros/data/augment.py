@@ -304,9 +304,10 @@ def insert_noise_words(
     (`fillers`: filler_word_ids). Names of kinds are inserted only with `absent_names` (per
     instruction, absent_name_pools: kinds neither on its map nor named in it; then a third of
     the words each): a name is content, and the Grounder leaves out the names of landmarks the
-    map does not hold, but the network alone reads them. Without `unknown` (a model that skips
-    unknown words, for which one is no noise at all) the words are fillers and names, half
-    each. The rest stay clean, so clean instructions keep their weight. `rng` alone draws
+    map does not hold, but the network alone reads them. Without `unknown` (for a model that
+    reads past unknown words, to which one is no noise) no <unk> is drawn: the words are
+    fillers, or fillers and names half each (a name from an empty pool is still <unk>). The
+    rest stay clean, so clean instructions keep their weight. `rng` alone draws
     everything, so data-parallel processes agree.
     """
     lengths = (tokens != PAD).sum(1).tolist()
