@@ -32,7 +32,7 @@ class TextEncoder(nn.Module):
         super().__init__()
         self.embed = nn.Embedding(cfg.vocab_size, cfg.word_dim, padding_idx=PAD)
         self.lstm = nn.LSTM(cfg.word_dim, cfg.hidden, batch_first=True)
-        self.skip_unknown = cfg.skip_unknown
+        self.skip_unknown = getattr(cfg, 'skip_unknown', False)  # ShapeWorldConfig has none
 
     def forward(self, tokens: torch.Tensor):
         mask = tokens != PAD
