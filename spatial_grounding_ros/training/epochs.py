@@ -175,7 +175,7 @@ class Epochs:
                 tc.text_noise,
                 self.text_noise_rng,
                 pools,
-                unknown=not self.model.cfg.skip_unknown,
+                unknown=not tc.skip_unknown,  # a model that skips <unk>: no <unk> noise
                 share=NOISE_SHARE if tc.noise_share is None else tc.noise_share,
             )
         # this process's share (weight 1.0: the whole batch, alone)
