@@ -192,6 +192,7 @@ def test_train_options_are_the_config_fields():
         text_noise=TASKS['pw'].text_noise,
         paraphrase=TASKS['pw'].paraphrase,
         generator_mode=TASKS['pw'].generator_mode,
+        **TASKS['pw'].recipes['t-rnet-attn'],  # the default's own fields (late row-col worlds)
     )
     # the paper's baselines have a recipe of their own: MSE alone, no distractor objects
     baseline = TrainConfig().for_task('pw-local', 't-cnn')
