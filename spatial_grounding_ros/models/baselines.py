@@ -32,7 +32,7 @@ class TCNN(EntityRows, nn.Module):
             raise ValueError("far relations are a relation network's; t-CNN has none")
         self.cfg = cfg
         self.phi = EntityEncoder(cfg)
-        self.text = TextEncoder(cfg)
+        self.text = TextEncoder(cfg, cfg.skip_unknown)
         # a 3x3 kernel per embedding dimension, then the head's code: 66 for k = 7
         kernel = 9 * cfg.embed_dim
         self.decoder = nn.Linear(cfg.hidden, kernel + head_code_size(cfg.head, cfg.head_text))
@@ -80,7 +80,7 @@ class TUVFA(nn.Module):
         super().__init__()
         c = cfg.uvfa_channels
         self.phi = nn.Embedding(cfg.n_entities, cfg.embed_dim)
-        self.text = TextEncoder(cfg)
+        self.text = TextEncoder(cfg, cfg.skip_unknown)
         self.to_text = nn.Linear(cfg.hidden, cfg.uvfa_text)
         self.state = nn.Sequential(
             nn.Conv2d(cfg.embed_dim, c, 3, padding=1),

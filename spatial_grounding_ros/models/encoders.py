@@ -23,16 +23,17 @@ class TextEncoder(nn.Module):
     """
     Word embedding -> LSTM; per-word outputs h(k), the mask of words read, and their mean.
 
-    With cfg.skip_unknown the LSTM runs over the known words alone, packed to the front, and
-    each output goes back to its word's place: an unknown word (<unk>) gets no output and no
-    attention, and the words around it read as if it were not there.
+    With `skip_unknown` (ModelConfig.skip_unknown) the LSTM runs over the known words alone,
+    packed to the front, and each output goes back to its word's place: an unknown word
+    (<unk>) gets no output and no attention, and the words around it read as if it were not
+    there.
     """
 
-    def __init__(self, cfg: ModelConfig):
+    def __init__(self, cfg: ModelConfig, skip_unknown: bool = False):
         super().__init__()
         self.embed = nn.Embedding(cfg.vocab_size, cfg.word_dim, padding_idx=PAD)
         self.lstm = nn.LSTM(cfg.word_dim, cfg.hidden, batch_first=True)
-        self.skip_unknown = getattr(cfg, 'skip_unknown', False)  # ShapeWorldConfig has none
+        self.skip_unknown = skip_unknown
 
     def forward(self, tokens: torch.Tensor):
         mask = tokens != PAD

@@ -48,7 +48,7 @@ class TRNet(EntityRows, nn.Module):
         super().__init__()
         self.cfg, self.attention = cfg, attention
         self.phi = EntityEncoder(cfg, pad=cfg.radius)
-        self.text = TextEncoder(cfg)
+        self.text = TextEncoder(cfg, cfg.skip_unknown)
         self.decoder = nn.Linear(cfg.hidden, relation_param_count(cfg))  # h -> 263
         if attention:
             # project h(k) to 2k dims to score it against [phi(s_i); phi(s_j)]. Zero at

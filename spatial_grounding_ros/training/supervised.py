@@ -232,25 +232,21 @@ def training_parts(
         held_out = set(val.worlds)
         worlds = pw_world_ids(data_dir, task.pw_modes)
         parts.append(load_world_instructions(data_dir, [w for w in worlds if w not in held_out]))
-    if tc.synthetic:
-        for n, (size, share) in enumerate(SYNTHETIC_SIZES):
-            count = int(round(tc.synthetic * share))
-            if count:
-                seed = 10_000 + 100 * tc.seed + n
-                generated = generate(count, seed=seed, mode=tc.generator_mode, size=size)
-                parts.append(paraphrased(generated, tc.paraphrase or 0.0, seed))
+    for n, size, count in per_size(tc.synthetic or 0):
+        seed = 10_000 + 100 * tc.seed + n
+        generated = generate(count, seed=seed, mode=tc.generator_mode, size=size)
+        parts.append(paraphrased(generated, tc.paraphrase or 0.0, seed))
     # one set per map size, so that a batch holds maps of one size
     by_size: dict[tuple, list[GroundingSet]] = {}
     for part in parts:
         by_size.setdefault(part.grids.shape[1:], []).append(part)
-    return [GroundingSet.concat(task.name, group) for group in by_size.values()] + late_parts(tc)
+    return [GroundingSet.concat(task.name, group) for group in by_size.values()]
 
 
-def late_sizes(tc: TrainConfig) -> list[tuple[int, int, int]]:
-    """Return (n, map size, count) of each map size's late row-col worlds (tc.late_row_col)."""
+def per_size(total: int) -> list[tuple[int, int, int]]:
+    """Split `total` generated worlds over SYNTHETIC_SIZES: (index, map size, count > 0)."""
     counts = [
-        (n, size, int(round((tc.late_row_col or 0) * share)))
-        for n, (size, share) in enumerate(SYNTHETIC_SIZES)
+        (n, size, int(round(total * share))) for n, (size, share) in enumerate(SYNTHETIC_SIZES)
     ]
     return [(n, size, count) for n, size, count in counts if count]
 
@@ -260,7 +256,7 @@ def late_parts(tc: TrainConfig) -> list[GroundingSet]:
     return [
         generate(count, seed=30_000 + 100 * tc.seed + n, mode='training', size=size,
                  families=('row-col',))
-        for n, size, count in late_sizes(tc)
+        for n, size, count in per_size(tc.late_row_col or 0)
     ]
 
 
@@ -399,18 +395,21 @@ def train_supervised(
     data = train_data if train_data is not None else load_task(task, 'train', data_dir)
     train, val = split_by_world(data, tc.val_fraction, tc.seed)
     parts = training_parts(settings, train, val, tc, data_dir)
+    late = late_parts(tc)  # trained on from epoch late_from * epochs on only
     val_generated = generated_validation(tc.generator_mode, tc.seed) if tc.synthetic else None
     # from everything trained on: generated phrasing and the mirrors' swapped direction words
-    vocab = Vocabulary.build(list(data.instructions) + [t for p in parts for t in p.instructions])
+    vocab = Vocabulary.build(
+        list(data.instructions) + [t for p in parts + late for t in p.instructions]
+    )
     cfg = model_config(settings, supports, tc, data, vocab, model_options)
     model = build_model(model_name, cfg)
     if tc.init:
         start_from(model, cfg, vocab, tc.init)
     processes = distributed.start()
-    # the late row-col worlds are the last parts: they join at epoch late_from * epochs
     late_from = LATE_FROM if tc.late_from is None else tc.late_from
-    late = (len(parts) - len(late_sizes(tc)), int(tc.epochs * late_from))
-    epochs = Epochs(model, parts, vocab, tc, processes, late)
+    epochs = Epochs(
+        model, parts + late, vocab, tc, processes, (len(parts), int(tc.epochs * late_from))
+    )
     start = time.perf_counter()
     bar = tqdm(
         range(tc.epochs),
@@ -424,7 +423,7 @@ def train_supervised(
     val_metrics = evaluate(model, vocab, val)
     if val_generated is not None:
         val_metrics['generated_hit'] = evaluate_hit(model, vocab, val_generated)
-    n_train = sum(len(p) for p in parts)
+    n_train = sum(len(p) for p in parts + late)
     summary = {
         'task': task,
         'train_examples': n_train,
