@@ -140,9 +140,20 @@ TASKS = {
             pw_modes=('local', 'global'),
             generator_mode='training',
             **_PW,
-            # t-RNetAttn: more row-col worlds for the last quarter of its epochs, and names of
-            # absent kinds among its noise words (docs/landmarks.md, "Row-col: the misses")
-            recipes={**_baselines(), 't-rnet-attn': {'late_row_col': 7200, 'noise_names': True}},
+            # t-RNetAttn: more row-col worlds for the last quarter of its epochs (docs/
+            # landmarks.md, "Row-col: the misses"); it reads past unknown words and, once
+            # trained, past names of kinds its map lacks, and fillers are its only noise words,
+            # in three quarters of the instructions (docs/robustness.md, "Reading past")
+            recipes={
+                **_baselines(),
+                't-rnet-attn': {
+                    'late_row_col': 7200,
+                    'noise_names': False,
+                    'skip_unknown': True,
+                    'skip_absent_names': True,
+                    'noise_share': 0.75,
+                },
+            },
             # the default's far relation scores any kind in reach, so it must learn to pass
             # over objects it does not know (docs/robustness.md)
             distractors=10,

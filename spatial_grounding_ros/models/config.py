@@ -70,6 +70,10 @@ class ModelConfig:
     # the text encoder reads past words outside its vocabulary (<unk>): the LSTM runs over the
     # known words alone, so an unknown word cannot move the goal
     skip_unknown: bool = False
+    # per kind, the vocabulary ids of the words that name it (and their plurals): the model reads
+    # a name of a kind its map lacks as an unknown word, since that landmark cannot be the one
+    # meant; () reads every name as it is (TrainConfig.skip_absent_names sets it)
+    name_words: tuple = ()
 
     # fields added after checkpoints were shipped, with the value those checkpoints had
     LATER_FIELDS = {
@@ -80,11 +84,13 @@ class ModelConfig:
         'far': False,
         'distractor_kinds': 0,
         'skip_unknown': False,
+        'name_words': (),
     }
 
     def to_dict(self) -> dict:
         d = asdict(self)
         d['mlp'], d['head'] = list(self.mlp), list(self.head)
+        d['name_words'] = [list(words) for words in self.name_words]
         return d
 
     @classmethod
@@ -93,7 +99,10 @@ class ModelConfig:
         missing = [f.name for f in fields(cls) if f.name not in d]
         if missing:
             raise ValueError(f'model config lacks {", ".join(missing)}')
-        return cls(**{**d, 'mlp': tuple(d['mlp']), 'head': tuple(d['head'])})
+        name_words = tuple(tuple(int(i) for i in words) for words in d['name_words'])
+        return cls(
+            **{**d, 'mlp': tuple(d['mlp']), 'head': tuple(d['head']), 'name_words': name_words}
+        )
 
 
 def head_code_size(channels: tuple, film: bool) -> int:

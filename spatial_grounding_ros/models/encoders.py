@@ -53,6 +53,26 @@ class TextEncoder(nn.Module):
         return words, mask, mean
 
 
+def absent_names_unknown(grids: torch.Tensor, tokens: torch.Tensor, cfg: ModelConfig):
+    """
+    Return tokens (B, L) with each word that names only kinds its map (B, H, W) lacks as <unk>.
+
+    `cfg.name_words` holds each kind's words. Such a landmark cannot be the one meant, so a
+    model that reads past unknown words (skip_unknown) passes over its name, as it would
+    over any word it never saw; a word that also names a kind on the map stays.
+    """
+    n = cfg.n_entities
+    names = torch.zeros(n, cfg.vocab_size, dtype=torch.bool, device=tokens.device)
+    for kind, words in enumerate(cfg.name_words):
+        names[kind, list(words)] = True
+    # the kinds each map holds; unseen and distractor kinds (n and up) name nothing
+    present = torch.zeros(len(grids), n + 1, device=tokens.device)
+    present.scatter_(1, grids.flatten(1).clamp(max=n), 1.0)
+    said_by_present = (present[:, :n] @ names.float()) > 0  # (B, V)
+    absent = names.any(0)[tokens] & ~said_by_present.gather(1, tokens)
+    return tokens.masked_fill(absent, UNK)
+
+
 # Seed of the unseen kinds' embedding rows: the same rows in every model and every checkpoint.
 UNSEEN_ROWS_SEED = 1010
 

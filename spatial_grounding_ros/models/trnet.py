@@ -14,6 +14,7 @@ import torch.nn.functional as F
 
 from .config import ModelConfig, neighbour_offsets, relation_param_count, relative_positions
 from .encoders import (
+    absent_names_unknown,
     EntityEncoder,
     kind_rows,
     kinds_per_map,
@@ -118,8 +119,11 @@ class TRNet(EntityRows, nn.Module):
         neighbours). Without attention that is when it has fewer rows than the maps have
         cells: a 10x10 map with all 12 kinds has 12 x 13 = 156 rows against 100 cells. With
         attention each of a map's pairs mixes the L words' weights, a table row mixes them
-        once for all its offsets, so the table wins on any map but the smallest.
+        once for all its offsets, so the table wins on any map but the smallest. With
+        cfg.name_words, a name of a kind the map lacks reads as <unk> (absent_names_unknown).
         """
+        if self.cfg.name_words:
+            tokens = absent_names_unknown(grids, tokens, self.cfg)
         kinds = kinds_per_map(grids, self.phi.embed.num_embeddings, self.phi.off_map)
         n_kinds = kinds.shape[1]
         rows, cells = n_kinds * (n_kinds + 1), grids.shape[1] * grids.shape[2]

@@ -26,6 +26,7 @@ from . import distributed
 from .epochs import Epochs, trim_padding
 from .options import check, option
 from ..core import tasks, world
+from ..core.entities import EntityTable
 from ..core.text import Vocabulary
 from ..data.augment import NOISE_SHARE, with_mirrors
 from ..data.datasets import (
@@ -36,12 +37,13 @@ from ..data.datasets import (
     split_by_world,
 )
 from ..data.generator import generate, MODES
-from ..data.noise import MAX_K
+from ..data.noise import kind_words, MAX_K
 from ..data.paraphrase import paraphrased
 from ..models.checkpoints import load_checkpoint, save_checkpoint
 from ..models.config import ModelConfig
 from ..models.protocol import Capabilities
 from ..models.registry import build_model, capabilities
+from ..models.trnet import TRNet
 
 # (map size, share of the generated examples): most at Janner's 10x10, some larger so that
 # references that span the map (extremes, gradients) learn how they scale.
@@ -116,6 +118,13 @@ class TrainConfig:
         None,
         'the model reads past words outside its vocabulary (ModelConfig.skip_unknown), and the '
         "noise words are fillers and names alone (default: the task's recipe's, or off)",
+    )
+    skip_absent_names: bool | None = option(
+        None,
+        'once trained, the model reads a name of a kind its map lacks as an unknown word, past '
+        'which --skip-unknown reads (ModelConfig.name_words): that landmark cannot be the one '
+        "meant. Training reads its instructions as written (default: the task's recipe's, or "
+        'off)',
     )
     noise_share: float | None = option(
         None,
@@ -318,6 +327,19 @@ def model_config(
     )
 
 
+def name_word_ids(entities: EntityTable, vocab: Vocabulary) -> tuple:
+    """Return each kind's name words and their plurals, as the vocabulary's ids (name_words)."""
+    return tuple(
+        tuple(
+            vocab.index[form]
+            for word in kind_words(entities, kind)
+            for form in (word, word + 's', word + 'es')
+            if form in vocab.index
+        )
+        for kind in range(len(entities))
+    )
+
+
 def start_from(model, cfg: ModelConfig, vocab: Vocabulary, checkpoint: str) -> None:
     """Load a checkpoint's weights into `model`, whose config and vocabulary must be its."""
     loaded = load_checkpoint(checkpoint)
@@ -403,6 +425,8 @@ def train_supervised(
     )
     cfg = model_config(settings, supports, tc, data, vocab, model_options)
     model = build_model(model_name, cfg)
+    if tc.skip_absent_names and not isinstance(model, TRNet):
+        raise ValueError(f'--skip-absent-names: {model_name} does not read it (t-RNet models do)')
     if tc.init:
         start_from(model, cfg, vocab, tc.init)
     processes = distributed.start()
@@ -420,6 +444,9 @@ def train_supervised(
     best, history = best_epoch(epochs, bar, vocab, val, val_generated)
     train_seconds = time.perf_counter() - start
     model.load_state_dict(best[1])
+    if tc.skip_absent_names:  # after training: the epochs and their validation are untouched
+        cfg = replace(cfg, name_words=name_word_ids(data.entities, vocab))
+        model.cfg = cfg
     val_metrics = evaluate(model, vocab, val)
     if val_generated is not None:
         val_metrics['generated_hit'] = evaluate_hit(model, vocab, val_generated)
