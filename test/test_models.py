@@ -394,6 +394,43 @@ def test_skip_unknown_reads_past_unknown_words(reference):
         assert not torch.allclose(model(grids, noisy, reference=reference), before, atol=1e-4)
 
 
+@pytest.mark.parametrize('reference', [False, True])
+def test_a_name_of_a_kind_the_map_lacks_reads_as_an_unknown_word(reference):
+    """With name_words, a name whose kinds are all off the map is passed over; others stay."""
+    torch.manual_seed(0)
+    # words 5 and 6 name kind 2 (a name and its plural), word 7 kind 3, word 8 kinds 3 and 4
+    names = ((), (), (5, 6), (7, 8), (8,)) + ((),) * 7
+    cfg = ModelConfig(vocab_size=9, skip_unknown=True, name_words=names, far=True)
+    model = build_model('t-rnet-attn', cfg).eval()
+    with torch.no_grad():  # attention that is not uniform, so a word's place matters
+        model.attn.weight.normal_()
+    grids = torch.randint(5, 12, (2, 6, 7))
+    grids[:, 1, 1] = 3  # kind 3 on both maps, kind 2 and kind 4 on neither
+    clean = torch.tensor([[4, 7, 3, 0, 0], [7, 2, 0, 0, 0]])
+    named = torch.tensor([[4, 5, 7, 6, 3], [7, 2, 8, 0, 0]])  # 8 also names kind 3: it stays
+    with torch.no_grad():
+        before = model(grids, clean, reference=reference)
+        after = model(grids, named, reference=reference)
+    torch.testing.assert_close(after[0], before[0], atol=1e-6, rtol=1e-5)
+    assert not torch.allclose(after[1], before[1], atol=1e-4)
+    # on a map that holds kind 2 its names are read: the map moves
+    grids[0, 2, 2] = 2
+    with torch.no_grad():
+        assert not torch.allclose(
+            model(grids, named, reference=reference)[0],
+            model(grids, clean, reference=reference)[0],
+            atol=1e-4,
+        )
+
+
+def test_name_words_survive_a_checkpoint():
+    names = ((), (), (5, 6), (7,)) + ((),) * 8
+    cfg = ModelConfig(vocab_size=9, skip_unknown=True, name_words=names)
+    assert ModelConfig.from_dict(cfg.to_dict()) == cfg
+    old = {k: v for k, v in cfg.to_dict().items() if k != 'name_words'}
+    assert ModelConfig.from_dict(old).name_words == ()  # a checkpoint from before reads all
+
+
 def test_skip_unknown_reads_an_all_unknown_instruction_as_one_word():
     torch.manual_seed(0)
     model = build_model('t-rnet-attn', ModelConfig(vocab_size=9, skip_unknown=True)).eval()

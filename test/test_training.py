@@ -213,6 +213,31 @@ def test_text_noise_trains_and_is_recorded(tmp_path):
     assert load_checkpoint(path).header['train_config']['text_noise'] == 3
 
 
+def test_skip_absent_names_is_set_once_trained_and_leaves_the_weights_as_they_were(tmp_path):
+    """The epochs read instructions as written: the weights are those of the run without it."""
+    data = generate(40, seed=6, mode='local')
+    paths = {}
+    for on in (False, True):
+        tc = one_epoch(skip_unknown=True, skip_absent_names=on)
+        paths[on], _ = train_supervised(
+            'pw-local', 't-rnet-attn', '', tmp_path / str(on), tc, train_data=data,
+            progress=False,
+        )
+    off, on = (load_checkpoint(paths[k]) for k in (False, True))
+    for name, weights in off.model.state_dict().items():
+        assert torch.equal(weights, on.model.state_dict()[name]), name
+    assert off.model.cfg.name_words == ()
+    words = on.vocab.words
+    rock = on.entities.index('rock')
+    assert {words[i] for i in on.model.cfg.name_words[rock]} <= {'rock', 'rocks', 'rockes'}
+    assert 'rock' in {words[i] for i in on.model.cfg.name_words[rock]}
+    with pytest.raises(ValueError, match='t-cnn does not read it'):
+        train_supervised(
+            'pw-local', 't-cnn', '', tmp_path, one_epoch(skip_absent_names=True),
+            train_data=data, progress=False,
+        )
+
+
 def test_text_noise_waits_for_the_attention():
     """
     t-RNetAttn's warm-up epochs read clean instructions; noise words come with the attention.
