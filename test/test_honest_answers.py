@@ -129,11 +129,10 @@ def test_nearness_alone_names_no_cell_and_furthest_from_is_not_read_as_closest()
     assert office.ground(grid, 'go to the cell beside the fridge').reason_code == 'ambiguous'
     # a side, a count or a kind to pick says which cell
     assert office.ground(grid, 'go next to the fridge on its left side').goal == (7, 7)
-    # (a kind to pick is answered, not declined; which chair is the model's closest: the
-    # default since f315ee9 lands on the fridge when the nearer chair is 7 columns away, as
-    # here, and on the chair from 6 columns in, so that is asked with the chair there)
+    # (a kind to pick is answered, not declined: the nearer chair, 7 columns from the fridge,
+    # and with it 6 columns away; the default of f315ee9 landed on the fridge at 7)
     g = office.ground(grid, 'go to the chair nearest the fridge')
-    assert g.reason is None and g.goal is not None
+    assert (g.reason, g.goal) == (None, (8, 1))
     grid[8, 1], grid[8, 2] = 0, table.index('chair')
     assert office.ground(grid, 'go to the chair nearest the fridge').goal == (8, 2)
     grid[8, 1], grid[8, 2] = table.index('chair'), 0

@@ -41,8 +41,8 @@ def test_mirrored_instructions_swap_their_direction_words():
 
 def test_the_value_map_is_the_mean_over_the_mirror_images(loaded):
     grid = np.zeros((9, 11), dtype=np.int64)
-    # (with the rock at (6, 8), one row above the other, the default since f315ee9 says (6, 9)
-    # at confidence 0.31, the one before (6, 10) at 0.48: a close call, not this test's point)
+    # (with the rock at (6, 8), one row above the other, the default of f315ee9 said (6, 9) at
+    # confidence 0.31, today's (6, 10) at 0.48: a close call, not this test's point)
     grid[2, 3], grid[3, 8], grid[4, 1], grid[7, 2] = E('star'), E('rock'), E('tree'), E('rock')
     text = 'reach cell two to the right of the northernmost rock'
     got = Grounder(loaded).ground(grid, text)
