@@ -26,6 +26,7 @@ import shutil
 import subprocess
 import time
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 import numpy as np
@@ -78,12 +79,17 @@ class DemoWatcher(Node):
         self.relation: OccupancyGrid | None = None
         self.true_goal: PoseStamped | None = None
         self.instruction = ''
+        self.declined: str | None = None  # the grounder's reason, when it sent no goal
         self.create_subscription(PoseStamped, topics.GOAL_POSE, self.goals.append, 10)
         self.create_subscription(PoseStamped, topics.AGENT_POSE, self.poses.append, STREAM)
         self.create_subscription(
             Float32, topics.REWARD, lambda m: self.rewards.append(m.data), STREAM
         )
         self.create_subscription(Bool, topics.TERMINATED, self.on_terminated, STREAM)
+        # the nodes' diagnostics, remapped into the namespace: a decline is a WARN there
+        self.create_subscription(
+            DiagnosticArray, topics.DIAGNOSTICS.lstrip('/'), self.on_diagnostics, 10
+        )
         self.create_subscription(
             OccupancyGrid, topics.ENTITY_MAP, lambda m: setattr(self, 'map_msg', m), LATCHED
         )
@@ -124,6 +130,12 @@ class DemoWatcher(Node):
             self.following = True
         return self.following
 
+    def on_diagnostics(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.name.endswith(': grounding') and status.level == DiagnosticStatus.WARN:
+                values = {v.key: v.value for v in status.values}
+                self.declined = values.get('reason', status.message)
+
     def on_terminated(self, msg: Bool) -> None:
         self.terminated_msgs += 1
         self.terminated = self.terminated or msg.data
@@ -147,6 +159,7 @@ class DemoWatcher(Node):
         return moves >= 0 and len(self.rewards) >= moves and self.terminated_msgs >= moves
 
     def clear(self) -> None:
+        self.declined = None
         self.goals.clear()
         self.poses.clear()
         self.rewards.clear()
@@ -213,11 +226,28 @@ def follow_episode(
     """
     spin_until(
         executor,
-        lambda: (watcher.goals and watcher.values is not None and watcher.relation is not None),
+        lambda: (
+            (watcher.goals or watcher.declined)
+            and watcher.values is not None
+            and watcher.relation is not None
+        ),
         60,
         'grounding',
         running,
     )
+    truth = watcher.cell(watcher.true_goal)
+    if not watcher.goals:  # declined: no goal, so the agent stays where it is
+        path = [watcher.cell(p) for p in watcher.poses[:1]]
+        return {
+            'goal': None,
+            'reason': watcher.declined,
+            'truth': truth,
+            'end': path[-1] if path else None,
+            'reached': False,
+            'md': None,
+            'reward': 0.0,
+            'path': path,
+        }
     goal = watcher.cell(watcher.goals[0])
 
     def settled() -> bool:
@@ -228,7 +258,6 @@ def follow_episode(
 
     spin_until(executor, settled, step_limit * step_period + 30, 'agent arrival', running)
     path = [watcher.cell(p) for p in watcher.poses]
-    truth = watcher.cell(watcher.true_goal)
     return {
         'goal': goal,
         'truth': truth,
@@ -258,6 +287,10 @@ def draw_episode(out: Path, k: int, watcher: DemoWatcher, seen: dict) -> None:
         truth,
         path_cells=path,
     )
+    if goal is None:
+        print(f'[{k}] {instruction!r}: declined ({seen["reason"]}), no goal sent, true {truth} '
+              f'-> {png}', flush=True)
+        return
     outcome = (
         'reached the true goal'
         if seen['reached']
@@ -275,10 +308,13 @@ def draw_episode(out: Path, k: int, watcher: DemoWatcher, seen: dict) -> None:
 
 def summarise(lines: list[dict], bag_path: Path, recorded: dict) -> dict:
     """Print and return the demo's summary, with the metrics computed back from the bag."""
+    answered = [line for line in lines if line['goal'] is not None]
     summary = {
         'episodes': len(lines),
         'reached': sum(line['reached'] for line in lines),
-        'md': float(np.mean([line['md'] for line in lines])) if lines else None,
+        'declined': len(lines) - len(answered),
+        # over the episodes it answered, as eval-bag counts MD
+        'md': float(np.mean([line['md'] for line in answered])) if answered else None,
         'reward': float(np.mean([line['reward'] for line in lines])) if lines else None,
         'bag': str(bag_path),
         'from_bag': evaluate_bag(bag_path).metrics(),
@@ -288,7 +324,9 @@ def summarise(lines: list[dict], bag_path: Path, recorded: dict) -> dict:
     bag = summary['from_bag']
     print(
         f'summary: {summary["reached"]}/{summary["episodes"]} episodes reached the goal, '
-        f'mean Manhattan error {summary["md"]:.2f}, mean reward {summary["reward"]:.2f}; '
+        f'{summary["declined"]} declined, mean Manhattan error of the answered '
+        f'{summary["md"] if summary["md"] is None else round(summary["md"], 2)}, '
+        f'mean reward {summary["reward"]:.2f}; '
         f'eval-bag on {bag_path}: n {bag["n"]}, MD {bag["md"]:.2f}, HIT {bag["hit"]:.2f}'
         + (f', PQ {bag["pq"]:.3f}, MSE {bag["mse"]:.3f}' if 'pq' in bag else '')
     )
