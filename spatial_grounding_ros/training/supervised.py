@@ -343,7 +343,8 @@ def name_word_ids(entities: EntityTable, vocab: Vocabulary) -> tuple:
 def start_from(model, cfg: ModelConfig, vocab: Vocabulary, checkpoint: str) -> None:
     """Load a checkpoint's weights into `model`, whose config and vocabulary must be its."""
     loaded = load_checkpoint(checkpoint)
-    if loaded.vocab.words != vocab.words or loaded.model.cfg != cfg:
+    # name_words is set once training ends (skip_absent_names): a run starts without it
+    if loaded.vocab.words != vocab.words or replace(loaded.model.cfg, name_words=()) != cfg:
         raise ValueError(
             f'--init {checkpoint}: its config or vocabulary differs from this run; '
             'fine-tune with the task and options it was trained with'
