@@ -61,6 +61,24 @@ def kind_words(entities: EntityTable, kind: int) -> list[str]:
     return name.split('_')
 
 
+def word_forms(word: str) -> tuple[str, str, str]:
+    """Return a name word as itself and with a plural s/es ('rock', 'rocks', 'rockes')."""
+    return word, word + 's', word + 'es'
+
+
+def kind_word_ids(entities: EntityTable, vocab: Vocabulary) -> tuple[tuple[int, ...], ...]:
+    """Return each kind's words in all their forms (word_forms), as `vocab`'s ids."""
+    return tuple(
+        tuple(
+            vocab.index[form]
+            for word in kind_words(entities, kind)
+            for form in word_forms(word)
+            if form in vocab.index
+        )
+        for kind in range(len(entities))
+    )
+
+
 def referenced_kinds(instruction: str, entities: EntityTable) -> set[int]:
     """
     Return the kinds an instruction references.
@@ -75,7 +93,7 @@ def referenced_kinds(instruction: str, entities: EntityTable) -> set[int]:
     for kind in range(len(entities)):
         words = kind_words(entities, kind)
         for start in range(len(tokens) - len(words) + 1):
-            if all(t in (w, w + 's', w + 'es') for t, w in zip(tokens[start:], words)):
+            if all(t in word_forms(w) for t, w in zip(tokens[start:], words)):
                 found.add(kind)
                 break
     return found

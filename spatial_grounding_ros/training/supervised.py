@@ -26,7 +26,6 @@ from . import distributed
 from .epochs import Epochs, trim_padding
 from .options import check, option
 from ..core import tasks, world
-from ..core.entities import EntityTable
 from ..core.text import Vocabulary
 from ..data.augment import NOISE_SHARE, with_mirrors
 from ..data.datasets import (
@@ -37,7 +36,7 @@ from ..data.datasets import (
     split_by_world,
 )
 from ..data.generator import generate, MODES
-from ..data.noise import kind_words, MAX_K
+from ..data.noise import kind_word_ids, MAX_K
 from ..data.paraphrase import paraphrased
 from ..models.checkpoints import load_checkpoint, save_checkpoint
 from ..models.config import ModelConfig
@@ -327,19 +326,6 @@ def model_config(
     )
 
 
-def name_word_ids(entities: EntityTable, vocab: Vocabulary) -> tuple:
-    """Return each kind's name words and their plurals, as the vocabulary's ids (name_words)."""
-    return tuple(
-        tuple(
-            vocab.index[form]
-            for word in kind_words(entities, kind)
-            for form in (word, word + 's', word + 'es')
-            if form in vocab.index
-        )
-        for kind in range(len(entities))
-    )
-
-
 def start_from(model, cfg: ModelConfig, vocab: Vocabulary, checkpoint: str) -> None:
     """Load a checkpoint's weights into `model`, whose config and vocabulary must be its."""
     loaded = load_checkpoint(checkpoint)
@@ -446,7 +432,7 @@ def train_supervised(
     train_seconds = time.perf_counter() - start
     model.load_state_dict(best[1])
     if tc.skip_absent_names:  # after training: the epochs and their validation are untouched
-        cfg = replace(cfg, name_words=name_word_ids(data.entities, vocab))
+        cfg = replace(cfg, name_words=kind_word_ids(data.entities, vocab))
         model.cfg = cfg
     val_metrics = evaluate(model, vocab, val)
     if val_generated is not None:
