@@ -282,7 +282,7 @@ def draw_episode(out: Path, k: int, watcher: DemoWatcher, seen: dict) -> None:
         PUDDLEWORLD,
         values,
         relation,
-        instruction,
+        instruction if goal is not None else f'{instruction} (declined: {seen["reason"]})',
         goal,
         truth,
         path_cells=path,
