@@ -8,10 +8,10 @@ A plain Python API over a trained model, for users who do not want topics.
     kitchen = Grounder.from_checkpoint(entities='kitchen.yaml')  # a table of your own
 
 A grid may use any entity table: the landmarks an instruction names (by name, alias, plural
-or a one-letter typo) are grounded as the model's own kinds (core/lexicon.py). When the
+or a one-letter typo) are grounded as the model's own kinds (language/lexicon.py). When the
 table and the map show that no cell fits (a landmark that is not there, a name no kind has,
 a cell past the edge, several landmarks named as one, an obstacle), or the model is unsure,
-the grounding declines: `goal` is None and `reason` says why (core/checks.py).
+the grounding declines: `goal` is None and `reason` says why (language/checks.py).
 
 The ROS grounder node is a thin adapter over this class.
 """
@@ -25,13 +25,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .core.checks import named_sides, structural_reason
+from .language.checks import named_sides, structural_reason
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.footprints import reduce_footprints
-from .core.lexicon import Lexicon, Mention, Translation
+from .language.lexicon import Lexicon, Mention, Translation
 from .core.text import tokenize, UNK
-from .core.units import offsets
-from .core.wording import (
+from .language.units import offsets
+from .language.wording import (
     canonical,
     cell_for_fixed_target,
     count_first,
@@ -58,7 +58,7 @@ MIRROR_AVERAGE_CELLS = 128 * 128
 
 # how many next-best cells a grounding reports
 ALTERNATIVES = 3
-# the reasons a grounding may decline with (core/checks.py has the structural ones)
+# the reasons a grounding may decline with (language/checks.py has the structural ones)
 REASONS = (
     'referent-missing',
     'unknown-landmark',
@@ -157,9 +157,9 @@ class Grounder:
         """
         Wrap a loaded checkpoint, for maps in `entities` (default: the checkpoint's table).
 
-        A model trained on PuddleWorld reads any table (core/lexicon.Translation); others
+        A model trained on PuddleWorld reads any table (language/lexicon.Translation); others
         only their own. `min_confidence` (0..1): a grounding less sure than this declines.
-        `cell_size`: metres per cell, for distances in metres (core/units.py); a table's
+        `cell_size`: metres per cell, for distances in metres (language/units.py); a table's
         landmarks may cover several cells (EntityTable.has_footprints, core/footprints.py).
         `kinds_by`: how the model's own landmark names take its kinds (lexicon.KINDS_BY).
         `mirror_average_cells`: on maps of at most this many cells the value map is the mean of
@@ -345,7 +345,7 @@ class Grounder:
 
     def reword(self, text: str) -> str:
         """
-        Return an instruction in the words the model learned (core/wording.py).
+        Return an instruction in the words the model learned (language/wording.py).
 
         Other wordings of a relation, a unit or a verb become the model's, filler goes, and
         so does every word the model never saw, so that none can move the goal. The model's

@@ -13,7 +13,7 @@ import pytest
 
 from spatial_grounding_ros.core.entities import EntityTable, PUDDLEWORLD
 from spatial_grounding_ros.core.footprints import anchor, footprints, reduce_footprints
-from spatial_grounding_ros.core.units import in_cells, offsets
+from spatial_grounding_ros.language.units import in_cells, offsets
 from spatial_grounding_ros.data.footprints import separate, unexplored
 from spatial_grounding_ros.data.generator import FAMILIES
 from spatial_grounding_ros.grounder import Grounder
@@ -155,7 +155,7 @@ def test_footprints_are_off_for_puddleworlds_one_cell_objects():
 @pytest.mark.parametrize('family', FAMILIES)
 def test_grown_worlds_keep_the_goal_named(family):
     """Each grown landmark's anchor, for its side, is the cell it was: the goal is unchanged."""
-    from spatial_grounding_ros.core.checks import named_sides
+    from spatial_grounding_ros.language.checks import named_sides
     from spatial_grounding_ros.core.text import tokenize
     from spatial_grounding_ros.data.footprints import mentions_of
 

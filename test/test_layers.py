@@ -116,6 +116,7 @@ def test_rclpy_only_under_ros():
 # share a floor (neither imports the other). The package's own __init__ is empty: floor 0.
 FLOORS = (
     ('core',),
+    ('language',),
     ('models',),
     ('data',),
     ('training',),

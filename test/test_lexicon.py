@@ -14,7 +14,7 @@ from spatial_grounding_ros.core.entities import (
     PUDDLEWORLD_NONUNIQUE,
     PUDDLEWORLD_UNIQUE,
 )
-from spatial_grounding_ros.core.lexicon import (
+from spatial_grounding_ros.language.lexicon import (
     COMMON_WORDS,
     Lexicon,
     singular,

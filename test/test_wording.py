@@ -9,7 +9,7 @@
 import numpy as np
 import pytest
 from spatial_grounding_ros.core.text import tokenize
-from spatial_grounding_ros.core.wording import (
+from spatial_grounding_ros.language.wording import (
     canonical,
     cell_for_fixed_target,
     count_first,

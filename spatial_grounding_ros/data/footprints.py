@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.checks import mention_offsets, named_sides
+from ..language.checks import mention_offsets, named_sides
 from ..core.entities import EntityTable
 from ..core.footprints import footprints
-from ..core.lexicon import COMMON_WORDS, Lexicon
+from ..language.lexicon import COMMON_WORDS, Lexicon
 from ..core.text import tokenize
 
 GROW_SHARE = 0.7  # the share of landmarks drawn over more than one cell

@@ -26,7 +26,7 @@ import numpy as np
 
 from .datasets import GroundingSet
 from ..core import world
-from ..core.checks import EXTREME_SIDES
+from ..language.checks import EXTREME_SIDES
 from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 
 GRASS, PUDDLE = 0, 1

@@ -5,9 +5,9 @@
 # https://opensource.org/licenses/MIT.
 
 """
-The generator's instructions worded as people word them (our own grammar, core/wording.py).
+The generator's instructions worded as people word them (our own grammar, language/wording.py).
 
-`paraphrase` rewords a generated instruction: each phrase of core/wording.PHRASES may become
+`paraphrase` rewords a generated instruction: each phrase of language/wording.PHRASES may become
 one of its other wordings, a count may gain a unit ("two squares below"), and a request may
 open or close with filler ("please", "the robot should"). The landmark names are kept. The
 suite measures the node on these (`suite --wording paraphrase`).
@@ -20,9 +20,9 @@ from dataclasses import replace
 import numpy as np
 
 from .datasets import GroundingSet
-from ..core.checks import NUMBERS
+from ..language.checks import NUMBERS
 from ..core.text import tokenize
-from ..core.wording import COUNTS, PHRASES
+from ..language.wording import COUNTS, PHRASES
 
 OPENINGS = ('', '', 'please', 'robot', 'the robot should', 'can you', 'now')
 CLOSINGS = ('', '', 'please', 'thanks', 'now')

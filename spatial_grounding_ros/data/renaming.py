@@ -21,7 +21,7 @@ import numpy as np
 
 from .generator import GRASS, PUDDLE
 from ..core.entities import EntityTable, PUDDLEWORLD
-from ..core.lexicon import phrase_words
+from ..language.lexicon import phrase_words
 from ..core.text import tokenize
 
 NAMINGS = ('name', 'alias', 'typo')

@@ -8,7 +8,7 @@
 Generated instructions that no cell of their map answers, one kind of failure at a time.
 
 Each case is a PuddleWorld-style world and an instruction in the generator's phrasing,
-broken one way, with the reason a grounder should give (core/checks.py names them):
+broken one way, with the reason a grounder should give (language/checks.py names them):
 
 - `missing`: a landmark it names is not on the map (`referent-missing`);
 - `unknown`: it names a landmark of no kind in the table (`unknown-landmark`);
@@ -23,7 +23,7 @@ import numpy as np
 
 from .generator import FAMILY_OFFSETS, GRASS, local_phrase, PUDDLE, random_grid, sample
 from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
-from ..core.lexicon import count_objects
+from ..language.lexicon import count_objects
 
 # the reason each kind of case should be declined with
 REASONS = {

@@ -45,7 +45,7 @@ from .package_files import find_config
 from .qos import LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
-from ..core.lexicon import Lexicon, phrase_words, singular
+from ..language.lexicon import Lexicon, phrase_words, singular
 from ..core.map_geometry import origin_quaternion, rotate
 
 NODE_NAME = 'entity_mapper'

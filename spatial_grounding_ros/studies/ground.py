@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.checks import said
+from ..language.checks import said
 from ..grounder import Grounder, Grounding
 from ..training.options import ranged
 

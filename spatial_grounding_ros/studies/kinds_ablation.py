@@ -20,7 +20,7 @@ from pathlib import Path
 
 from .honesty import human
 from .suite import run_suite
-from ..core.lexicon import KINDS_BY
+from ..language.lexicon import KINDS_BY
 from ..data.datasets import DEFAULT_DATA
 from ..grounder import DEFAULT_CHECKPOINT, Grounder
 from ..models.checkpoints import load_checkpoint

@@ -35,8 +35,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from .entities import EntityTable
-from .footprints import anchor, footprints, side_of
+from ..core.entities import EntityTable
+from ..core.footprints import anchor, footprints, side_of
 from .lexicon import (
     COMMON_WORDS,
     count_objects,

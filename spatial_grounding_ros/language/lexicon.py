@@ -22,9 +22,9 @@ from typing import Iterable
 
 import numpy as np
 
-from .entities import EntityTable
-from .footprints import footprints
-from .text import tokenize
+from ..core.entities import EntityTable
+from ..core.footprints import footprints
+from ..core.text import tokenize
 
 # only a name this long is read through a typo: shorter ones are one edit from too many words
 TYPO_MIN_LETTERS = 4

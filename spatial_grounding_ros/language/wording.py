@@ -26,7 +26,7 @@ from typing import Iterable
 
 from .checks import DIRECTIONS, NUMBERS, offset_before
 from .lexicon import Mention
-from .text import tokenize
+from ..core.text import tokenize
 from .units import METRIC_UNIT
 
 # canonical words -> the other wordings of them (each a phrase of one or more words)
@@ -144,7 +144,7 @@ def reworded(words: list[str], mentions: list[Mention]) -> tuple[list[str], list
     """
     Return the words in the model's wording and the landmarks named, moved to match.
 
-    What reads an instruction's offsets and sides (core/checks.py, the footprint anchors)
+    What reads an instruction's offsets and sides (language/checks.py, the footprint anchors)
     reads this: "go over to the couch" names no offset, "two right above" is "two above".
     """
     keep = {i for m in mentions for i in range(m.start, m.end)}
