@@ -19,29 +19,18 @@ The ROS grounder node is a thin adapter over this class.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from .language.checks import named_sides, structural_reason
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.footprints import reduce_footprints
+from .language.checks import map_reason, named_sides, said
 from .language.lexicon import Lexicon, Mention, Translation
-from .core.text import tokenize, UNK
-from .language.units import offsets
-from .language.wording import (
-    canonical,
-    cell_for_fixed_target,
-    count_first,
-    drop_unknown,
-    reworded,
-    side_of_it,
-    tidy,
-    unpossessed,
-    wording_words,
-)
+from .language.reading import Command, Reader, Reference
+from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
@@ -67,6 +56,8 @@ REASONS = (
     'unsupported',
     'goal-on-obstacle',
     'low-confidence',
+    'unreadable',
+    'negation',
 )
 
 
@@ -96,6 +87,12 @@ class Grounding:
     # the cell of a named landmark nearest the best cell (a goal can face it), or None
     referent: tuple[int, int] | None = None
     model_instruction: str = ''  # what the model read: the landmarks in its own names
+    # what the instruction asks for (language.reading.INTENTS): 'go' one goal; 'sequence'
+    # `steps` in order, `goal` the first's; 'question' no goal, `answer` in words and
+    # `referent` the landmark's cell; 'stop', 'negation', 'unsupported' no goal
+    intent: str = 'go'
+    steps: list['Grounding'] = field(default_factory=list)
+    answer: str | None = None
 
     @property
     def reason_code(self) -> str | None:
@@ -192,7 +189,12 @@ class Grounder:
                 f'the {self.entities.domain} table needs a PuddleWorld model'
             )
         self.lexicon = self.translation.lexicon if self.translation else Lexicon(self.entities)
-        self.known = frozenset(self.vocab.words[2:]) | wording_words()
+        self.reader = Reader(
+            self.lexicon,
+            self.vocab.words[2:],
+            loaded.entities.names,
+            own_table=self.entities.names == loaded.entities.names,
+        )
         # calibration: confidence is the softmax of the values at this temperature
         self.temperature = float(loaded.header.get('calibration', {}).get('temperature', 1.0))
         self.model.eval()
@@ -251,33 +253,35 @@ class Grounder:
         words = tokenize(instruction)
         if not words:
             raise ValueError('instruction has no words')
-        named = {i for m in self.lexicon.mentions(words) for i in range(m.start, m.end)}
-        if not named and all(i == UNK for i in self.vocab.encode(instruction)):
+        if not self.lexicon.mentions(words) and not any(w in self.reader.known for w in words):
             raise ValueError(f'no word of the instruction {instruction!r} is in the vocabulary')
 
-    @torch.no_grad()
-    def text_code(self, instruction: str, images: tuple = IMAGES) -> tuple[str, TextCode]:
-        """
-        Return what the model reads of an instruction (reword) and its text code for `images`.
+    def read(self, instruction: str, cell_size: float | None = None) -> Command:
+        """Return the one reading of an instruction that every stage reads (cached)."""
+        return self.reader.read(instruction, self.cell_size if cell_size is None else cell_size)
 
-        The code holds the instruction as said of each image of the map (IMAGES: the first is
-        the instruction as it is; large maps take IMAGES[:1]). Each is computed once, when a
-        map first needs it, while the instruction is in use.
+    @torch.no_grad()
+    def text_code(self, model_text: str, images: tuple = IMAGES) -> TextCode:
         """
-        cached = self.text_codes.pop(instruction, None)
-        if cached is None:
-            cached = self.reword(instruction), {}
+        Return the network's text code of its words for `images` of the map.
+
+        The code holds the words as said of each image of the map (IMAGES: the first is the
+        words as they are; large maps take IMAGES[:1]). Each is computed once, when a map
+        first needs it, while the words are in use.
+        """
+        codes = self.text_codes.pop(model_text, None)
+        if codes is None:
+            codes = {}
             if len(self.text_codes) >= self.cached_instructions:
                 self.text_codes.popitem(last=False)
-        self.text_codes[instruction] = cached
-        words, codes = cached
+        self.text_codes[model_text] = codes
         if images not in codes:
             # encoded as a batch of all the images' wordings, so that the first image's tokens
             # carry the same padding whichever images a map takes
-            said = [mirror_instruction(words, axes) for axes in IMAGES]
+            said = [mirror_instruction(model_text, axes) for axes in IMAGES]
             tokens = torch.as_tensor(self.vocab.encode_batch(said))
             codes[images] = self.model.text_code(tokens[: len(images)])
-        return words, codes[images]
+        return codes[images]
 
     @torch.no_grad()
     def ground(
@@ -286,35 +290,37 @@ class Grounder:
         """
         Ground an instruction on a grid of this grounder's table.
 
-        `cell_size` (metres per cell; default: the grounder's) turns distances in metres
-        into cells; a distance in metres without one raises ValueError.
+        The stages: check the map, read the instruction (one Command, language/reading.py),
+        then by its intent ground each place it names (`ground_reference`), answer a
+        question, or say why no goal is sent. `cell_size` (metres per cell; default: the
+        grounder's) turns lengths into cells; a length without one raises ValueError.
         """
         self.check(grid, instruction)
+        command = self.read(instruction, cell_size)
         grid = np.asarray(grid, dtype=np.int64)
-        spoken = count_first(unpossessed(instruction))  # the landmark's side, a count after it
-        distances = offsets(spoken, self.cell_size if cell_size is None else cell_size)
-        words = tokenize(distances.text)
-        if self.translation is not None:
-            translated = self.translation(grid, distances.model_text)
-            model_grid, model_text = translated.grid, translated.instruction
-            mentions = list(translated.mentions)
-            if self.entities.has_footprints:
-                model_grid = self.anchored(model_grid, translated, distances.model_text)
-        else:
-            model_text = distances.model_text
-            model_grid, mentions = grid, self.lexicon.mentions(tokenize(model_text))
+        if command.intent in ('go', 'sequence'):
+            steps = [self.ground_reference(grid, instruction, ref) for ref in command.steps]
+            return self.in_order(instruction, command, steps)
+        if command.intent == 'question':
+            return self.answered(grid, instruction, command)
+        return self.no_goal(grid, instruction, command, command.reason)
+
+    def ground_reference(self, grid: np.ndarray, instruction: str, ref: Reference) -> Grounding:
+        """Return the grounding of one place: the network's value map, judged and checked."""
+        model_grid, names, mentions = self.model_view(grid, ref)
+        words, extra = ref.model_words(names)
+        model_text = ' '.join(words)
         images = IMAGES if model_grid.size <= self.mirror_average_cells else IMAGES[:1]
-        model_text, code = self.text_code(model_text, images)
+        code = self.text_code(model_text, images)
         values, aux = self.model.ground(imaged(model_grid, images), code, True)
-        values = shifted(averaged(values.numpy(), images), distances.extra)
+        values = shifted(averaged(values.numpy(), images), extra)
         best, confidence, alternatives = self.judge(values)
-        reason = structural_reason(self.entities, grid, *reworded(words, mentions), self.known)
+        reason = ref.reason or map_reason(self.entities, grid, list(ref.words), list(mentions))
         if reason is None and int(grid[best]) in self.entities.obstacles:
             reason = 'goal-on-obstacle'
         if reason is None and confidence < self.min_confidence:
             reason = f'low-confidence: {confidence:.2f} < {self.min_confidence:.2f}'
         attention = aux['attention']
-        named = {i for m in mentions for i in range(m.start, m.end)}
         return Grounding(
             instruction,
             values,
@@ -322,45 +328,88 @@ class Grounder:
             None if reason else best,
             words,
             None if attention is None else attention[0].tolist(),
-            [w for i, w in enumerate(words) if w not in self.known and i not in named],
+            list(ref.unknown_words),
             best=best,
             confidence=confidence,
             reason=reason,
             alternatives=alternatives,
-            landmarks=self.named(mentions),
+            landmarks=self.named(list(mentions)),
             referent=nearest_cell(grid, [m.kind for m in mentions], best),
             model_instruction=model_text,
         )
 
-    def anchored(self, model_grid: np.ndarray, translated, text: str) -> np.ndarray:
+    def model_view(self, grid: np.ndarray, ref: Reference):
         """
-        Return the model's grid with each named landmark's footprint reduced to its anchor.
+        Return the map in the network's kinds, each mentioned kind's name for it, and mentions.
 
-        The side each landmark's offset leaves it on is read from the words before its
-        mention (core/footprints.py).
+        A model of PuddleWorld reads any table (language/lexicon.Translation): the landmarks
+        named become its kinds (a landmark the map lacks has no name: it is left out), and a
+        landmark over several cells is reduced to its anchor on the side its offset leaves it.
         """
-        sides = named_sides(*reworded(tokenize(text), list(translated.mentions)))
-        sides = {translated.kinds[k]: side for k, side in sides.items() if k in translated.kinds}
-        return reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
+        mentions = list(ref.mentions)
+        if self.translation is None:
+            return grid, {m.kind: self.entities.names[m.kind] for m in mentions}, mentions
+        translated = self.translation.translate(grid, list(ref.words), mentions)
+        model_grid = translated.grid
+        names = {k: self.model_entities.names[v] for k, v in translated.kinds.items()}
+        for m in mentions:
+            if m.kind in self.entities.obstacles:
+                names[m.kind] = self.model_entities.names[self.model_entities.obstacles[0]]
+        if self.entities.has_footprints:
+            sides = named_sides(list(ref.words), mentions)
+            sides = {translated.kinds[k]: v for k, v in sides.items() if k in translated.kinds}
+            model_grid = reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
+        return model_grid, names, mentions
 
-    def reword(self, text: str) -> str:
-        """
-        Return an instruction in the words the model learned (language/wording.py).
+    def in_order(self, instruction: str, command: Command, steps: list[Grounding]) -> Grounding:
+        """Return a go's grounding, or a sequence's: its first step's, with every step."""
+        first = steps[0]
+        if command.intent == 'go':
+            return first
+        declined = next(((k, g) for k, g in enumerate(steps) if g.goal is None), None)
+        reason = None if declined is None else f'{declined[1].reason} (step {declined[0] + 1})'
+        return replace(
+            first,
+            instruction=instruction,
+            goal=None if reason else first.goal,
+            reason=reason,
+            intent='sequence',
+            steps=steps,
+            confidence=float(np.prod([g.confidence for g in steps])),
+            landmarks=list(dict.fromkeys(n for g in steps for n in g.landmarks)),
+        )
 
-        Other wordings of a relation, a unit or a verb become the model's, filler goes, and
-        so does every word the model never saw, so that none can move the goal. The model's
-        own landmark names are never reworded, but a target whose row and column two
-        landmarks fix is said as "cell" (wording.cell_for_fixed_target), a side of "its"
-        landmark is said of it (wording.side_of_it), and a verb past the opening or a repeated
-        article is left out (wording.tidy).
-        """
-        words = tokenize(text)
-        names = [i for i, w in enumerate(words) if w in self.model_entities.names]
-        words = tidy(drop_unknown(canonical(words, names), self.vocab.index))
-        names = [i for i, w in enumerate(words) if w in self.model_entities.names]
-        words = side_of_it(words, names)
-        names = [i for i, w in enumerate(words) if w in self.model_entities.names]
-        return ' '.join(cell_for_fixed_target(words, names))
+    def answered(self, grid: np.ndarray, instruction: str, command: Command) -> Grounding:
+        """Return a question's grounding: no goal; the landmark asked of, in words and cell."""
+        ref = command.reference
+        out = self.no_goal(grid, instruction, command, None)
+        if ref is None or not ref.mentions:
+            return replace(out, answer='I cannot tell which landmark the question asks of')
+        kind = ref.mentions[0].kind
+        name = said(self.entities, kind)
+        cells = np.argwhere(grid == kind)
+        if not len(cells):
+            return replace(out, answer=f'there is no {name} on the map', landmarks=[name])
+        cell = (int(cells[0][0]), int(cells[0][1]))
+        n = len(np.unique(cells[:, 0] * grid.shape[1] + cells[:, 1]))
+        where = f'row {cell[0]}, column {cell[1]}'
+        answer = f'the {name} is at {where}' + (f' ({n} cells)' if n > 1 else '')
+        return replace(out, answer=answer, referent=cell, landmarks=[name])
+
+    def no_goal(self, grid: np.ndarray, instruction: str, command: Command, reason):
+        """Return a grounding that sends no goal: a stop, a question, a decline."""
+        zeros = np.zeros(grid.shape, dtype=np.float32)
+        return Grounding(
+            instruction,
+            zeros,
+            zeros,
+            None,
+            tokenize(instruction),
+            None,
+            [],
+            reason=reason,
+            intent=command.intent,
+        )
 
     def judge(self, values: np.ndarray):
         """Return the best cell, its calibrated probability, and the next best with theirs."""

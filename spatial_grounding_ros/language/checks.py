@@ -31,8 +31,6 @@ grounder's to judge, after it has grounded.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..core.entities import EntityTable
@@ -260,48 +258,6 @@ def ambiguity(
     return None if set(before) & QUALIFIERS else (count, '')
 
 
-def unknown_landmark(words: list[str], known, mentions: list[Mention]) -> str | None:
-    """
-    Return a word no table kind or known word covers where a landmark's name goes, or None.
-
-    That is a word that ends its phrase after "the", "of", "below" and the like: "below the
-    fridge", "go to the fridge", but not "the gray stone" or "kitty corner". Where the
-    instruction names a landmark of the table too, only a word right after an article counts
-    ("the chair closest to the fridge"; not "the tree furthest west somewhere").
-    """
-    before = BEFORE_A_NAME if not mentions else ARTICLES
-    for i, w in enumerate(words):
-        if not unknown(w, known, mentions, i):
-            continue
-        ends = i + 1 == len(words) or words[i + 1] in CLAUSES | PHRASE_ENDS
-        if ends and i > 0 and words[i - 1] in before:
-            return w
-    return None
-
-
-def unknown(word: str, known, mentions: list[Mention], at: int) -> bool:
-    """Return whether a word is none the checks, the model or the table know."""
-    if any(m.start <= at < m.end for m in mentions):
-        return False
-    return not (
-        word in known
-        or word in COMMON_WORDS
-        or word in NUMBERS
-        or word in DIRECTIONS
-        or word in QUALIFIERS
-        or word in CLAUSES
-        or word in MAP_WORDS
-    )
-
-
-def without_unknown(words: list[str], known, mentions: list[Mention]):
-    """Return the words and mentions with every unknown word left out, as the model reads."""
-    kept = [i for i, w in enumerate(words) if not unknown(w, known, mentions, i)]
-    where = {old: new for new, old in enumerate(kept)}
-    moved = [replace(m, start=where[m.start], end=where[m.end - 1] + 1) for m in mentions]
-    return [words[i] for i in kept], moved
-
-
 def said(table: EntityTable, kind: int) -> str:
     """Return a kind's name as words ('trash_can': 'trash can')."""
     return table.names[kind].replace('_', ' ')
@@ -322,33 +278,23 @@ def nearness_alone(words: list[str], mentions: list[Mention]) -> bool:
     return not any(w in DIRECTIONS or w in NUMBERS for w in words)
 
 
-def structural_reason(
-    table: EntityTable,
-    grid: np.ndarray,
-    words: list[str],
-    mentions: list[Mention],
-    known=frozenset(),
+def map_reason(
+    table: EntityTable, grid: np.ndarray, words: list[str], mentions: list[Mention]
 ) -> str | None:
-    """Return the first reason the table and the map give that no cell fits, or None."""
+    """
+    Return the first reason the map gives that no cell fits the words, or None.
+
+    `words` and `mentions` are a reference as the reading gives it (reading.Reference): the
+    model's wording, each landmark one word; what the words alone rule out (an unknown
+    landmark, an unlearned relation, a side a map has not) the reading has judged already.
+    """
     for m in mentions:
         if m.kind in table.obstacles:
             continue
         if not (grid == m.kind).any():
             return f'referent-missing: {said(table, m.kind)}'
-    word = unknown_landmark(words, known, mentions)
-    if word is not None:
-        return f'unknown-landmark: {word}'
-    text = f' {" ".join(words)} '
-    sideless = next((w for w in SIDELESS if f' {w} ' in text), None)
-    if mentions and sideless:
-        return f'ambiguous: "{sideless}" names no side on a map'
-    unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
-    if mentions and unlearned:
-        return f'unsupported: "{unlearned}" is no relation the model learned'
     if nearness_alone(words, mentions):
         return f'ambiguous: no side of the {said(table, mentions[0].kind)} is named'
-    # the rest reads the words around a name: an unknown word there says nothing
-    words, mentions = without_unknown(words, known, mentions)
     if off_map(grid, words, mentions):
         return 'off-map'
     if on_obstacle(table, grid, words, mentions):

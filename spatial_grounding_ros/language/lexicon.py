@@ -274,7 +274,11 @@ class Translation:
 
     def __call__(self, grid: np.ndarray, instruction: str) -> Translated:
         words = tokenize(instruction)
-        mentions = self.lexicon.mentions(words)
+        return self.translate(grid, words, self.lexicon.mentions(words))
+
+    def translate(self, grid: np.ndarray, words: list[str], mentions: list[Mention]) -> Translated:
+        """Return the map and the words in the model's kinds, the landmarks `mentions` named."""
+        words = list(words)
         unique, nonunique = list(self.unique), list(self.nonunique)
         kinds: dict[int, int] = {}
         # a distance reference grounds its landmarks by role even where the model knows

@@ -21,18 +21,33 @@ from dataclasses import dataclass
 import functools
 import re
 
+from text_to_num import alpha2digit
+
 from .checks import DIRECTIONS, NUMBERS
+from .vocabulary import LENGTH_UNITS
 
 LEARNED_COUNT = 4  # the longest count the network was trained on
 # number words (one .. twelve), as the structural checks read them
 _NUMBER_WORDS = {w: n for w, n in NUMBERS.items() if w.isalpha()}
 COUNT_WORDS = {n: w for w, n in _NUMBER_WORDS.items() if n <= LEARNED_COUNT}
-_AMOUNT = r'(?P<n>\d+(?:[.,]\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + ')'
-_METRES = {'m': 1.0, 'metre': 1.0, 'meter': 1.0, 'cm': 0.01, 'centimetre': 0.01,
-           'centimeter': 0.01}  # fmt: skip
-# a unit of length after an amount (wording.count_first reads it too)
-METRIC_UNIT = r'centimetres?|centimeters?|cm|metres?|meters?|m'
-_METRIC = re.compile(rf'\b{_AMOUNT}\s*(?P<unit>{METRIC_UNIT})\b', re.IGNORECASE)
+# an amount of a length: digits, a number word, "a", "half a", and "and a half" after it
+_AMOUNT = (
+    r'(?P<n>\d+(?:[.,]\d+)?|half an?|an?|' + '|'.join(_NUMBER_WORDS) + r')'
+    r'(?P<half1>\s+and\s+a\s+half)?'
+)
+# a unit of length after an amount (wording.count_first reads it too): vocabulary.LENGTH_UNITS
+METRIC_UNIT = '|'.join(sorted(map(re.escape, LENGTH_UNITS), key=len, reverse=True))
+_METRIC = re.compile(
+    rf'\b{_AMOUNT}\s*(?P<unit>{METRIC_UNIT})\b(?P<half2>\s+and\s+a\s+half)?', re.IGNORECASE
+)
+# cardinal number words past three ("six", "twenty one"), read by text2num into digits; one to
+# three stay words, as the network learned them
+_CARDINAL = re.compile(
+    r"\b(?:(?:zero|one|two|three|four|five|six|seven|eight|nine|ten|eleven|twelve|thirteen|"
+    r"fourteen|fifteen|sixteen|seventeen|eighteen|nineteen|twenty|thirty|forty|fifty|sixty|"
+    r"seventy|eighty|ninety|hundred|point)(?:[\s-]+|\b))+",
+    re.IGNORECASE,
+)
 _UNIT_WORD = r'(?:\s+(?:cells?|squares?|steps?|spaces?|tiles?|spots?))?'
 # a count followed, after an optional unit, by the direction it goes
 _COUNT = re.compile(
@@ -60,6 +75,17 @@ def _amount(text: str) -> float:
     return float(_NUMBER_WORDS.get(text) or text.replace(',', '.'))  # 1,5 m is 1.5 m
 
 
+def digits(text: str) -> str:
+    """Return the text with each cardinal number past three in digits ("six feet": "6 feet")."""
+
+    def number(match: re.Match) -> str:
+        said = match.group(0)
+        out = alpha2digit(said.strip(), 'en')
+        return out + said[len(said.rstrip()):]
+
+    return _CARDINAL.sub(number, text)
+
+
 def in_cells(instruction: str, cell_size: float | None) -> str:
     """
     Return the instruction with each distance in metres as a count of cells.
@@ -73,8 +99,8 @@ def in_cells(instruction: str, cell_size: float | None) -> str:
                 f'{match.group(0)!r} is a distance in metres; grounding it needs the map cell '
                 'size in metres (cell_size; the ground command: --cell-size)'
             )
-        unit = match.group('unit').lower().rstrip('s')
-        metres = _amount(match.group('n')) * _METRES[unit]
+        half = 0.5 if match.group('half1') or match.group('half2') else 0.0
+        metres = (_amount(match.group('n')) + half) * LENGTH_UNITS[match.group('unit').lower()]
         return str(max(1, round(metres / cell_size)))
 
     if cell_size is not None and not cell_size > 0:

@@ -1,0 +1,492 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+One reading of an instruction: what it asks for, and the place it names in the model's words.
+
+`Reader.read` turns what a person says into a `Command`, once per instruction (and cell size),
+and everything downstream reads that value: the Grounder's checks, the network's text, the
+node and its service. The reading is a list of named stages, each a small function:
+
+1. numbers and lengths: "six feet" -> "4" cells at the map's cell size (units.py, text2num);
+2. what the speaker settled on: a self-correction ("the desk, no wait, the fridge") keeps the
+   last place said; of several sentences, the one that says where to go or meet;
+3. the intent: `stop`, `question`, `negation` and `unsupported` (declined: a goal would say
+   something else than was asked), `sequence` (steps in order) or `go`;
+4. each step's words: spelling against the relation words (rapidfuzz), landmarks named by the
+   table's names and aliases (lexicon.py), paths passed ("down the hall") left out, then the
+   model's wording (wording.py) with each landmark held as one slot, so the checks and the
+   network read the same words (`Reference.words`);
+5. what the words alone rule out: a word where a landmark's name goes that no kind has
+   (`unknown-landmark`), a word not understood where it would change the goal (`unreadable`),
+   a relation the model never learned (`unsupported`), a side a map has not (`ambiguous`).
+
+Why a table-driven reader and not a parsing library's grammar: what people say to a robot is
+not a language to accept or reject. A reading must go on past a word it does not know, keep
+the words it cannot type for the network (which learned from human annotators' free text),
+and be cheap (well under a millisecond at ten words). The grammar is the word classes of
+vocabulary.py, checks.py and wording.py, and the stages below that read them in order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+import functools
+import re
+
+from rapidfuzz import process
+from rapidfuzz.distance import OSA
+
+from .checks import (
+    ARTICLES,
+    BEFORE_A_NAME,
+    CLAUSES,
+    DIRECTIONS,
+    EXTREME_SIDES,
+    MAP_WORDS,
+    NUMBERS,
+    PHRASE_ENDS,
+    QUALIFIERS,
+    SIDELESS,
+    UNLEARNED,
+)
+from .lexicon import COMMON_WORDS, Lexicon, Mention, RELATION_WORDS
+from .units import digits, in_cells, LEARNED_COUNT, offsets
+from .vocabulary import (
+    CORRECTIONS,
+    DEICTIC,
+    FILLERS,
+    GO_VERBS,
+    LENGTH_UNITS,
+    NEGATIONS,
+    PATH_WORDS,
+    QUESTION_OPENERS,
+    REQUEST_OPENERS,
+    SEQUENCE_MARKS,
+    STOP_HEADS,
+    STOP_WORDS,
+    UNSUPPORTED,
+)
+from .wording import (
+    canonical,
+    cell_for_fixed_target,
+    count_first,
+    OPENING_VERBS,
+    PHRASES,
+    side_of_it,
+    tidy,
+    UNITS,
+    unpossessed,
+    wording_words,
+)
+from ..core.text import tokenize
+
+INTENTS = ('go', 'stop', 'question', 'sequence', 'negation', 'unsupported')
+# a landmark's slot in a reference's words: '@0', '@1', ... one token per mention, never a
+# word of any text (the tokenizer keeps no '@')
+SLOT = '@'
+
+
+def is_slot(word: str) -> bool:
+    return word.startswith(SLOT)
+# the words a misspelt word may be read as (one edit; two for words of seven letters or more)
+SPELLING_TARGETS = tuple(
+    sorted(
+        set(DIRECTIONS) | set(EXTREME_SIDES) | set(w for w in NUMBERS if w.isalpha())
+        | set(UNITS) | set(LENGTH_UNITS) | GO_VERBS | RELATION_WORDS
+        | {w for p in PHRASES if p for w in tokenize(p)}
+        | set('closest nearest farthest furthest between next beside cell square'.split())
+    )
+)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """
+    One place an instruction names, as the checks and the network read it.
+
+    `words` are the model's wording of the place with each landmark named as one slot
+    (`mentions`, in order); `model_words()` gives the network's text for a map's kinds.
+    """
+
+    said: str  # the words of the instruction it was read from
+    words: tuple[str, ...]  # the model's wording; a mention's slot holds its last word
+    mentions: tuple[Mention, ...]  # each spans one word of `words`
+    reason: str | None = None  # why the words alone leave no cell to go to
+    unknown_words: tuple[str, ...] = ()  # words read as none (left out)
+    spelled: tuple[tuple[str, str], ...] = ()  # (word said, word read) for each misspelling
+
+    def model_words(self, names: dict[int, str | None]) -> tuple[list[str], tuple[int, int]]:
+        """
+        Return the network's words and the offset past its counts.
+
+        `names`: each mentioned kind's name for the network, or None to leave it out (a
+        landmark the map lacks). Counts past LEARNED_COUNT are cut to it and the rest is
+        returned as (rows, cols) to shift the value map by (units.offsets).
+        """
+        out = []
+        for i, w in enumerate(self.words):
+            slot = next((m for m in self.mentions if m.start == i), None)
+            if slot is None:
+                out.append(w)
+            elif names.get(slot.kind) is not None:
+                out.append(names[slot.kind])
+        cut = offsets(' '.join(out))
+        return cut.model_text.split(), cut.extra
+
+
+@dataclass(frozen=True)
+class Command:
+    """What an instruction asks for: an intent and the places it names, in order."""
+
+    text: str
+    intent: str  # one of INTENTS
+    steps: tuple[Reference, ...] = ()  # go: one; sequence: several; question: its landmark
+    reason: str | None = None  # negation, unsupported: why no goal is sent
+    notes: tuple[str, ...] = field(default=())  # what the reading did ('corrected', ...)
+
+    @property
+    def reference(self) -> Reference | None:
+        """Return the first place named (the goal's, for go and sequence), or None."""
+        return self.steps[0] if self.steps else None
+
+
+def phrase_at(words: list[str], i: int, phrases) -> str | None:
+    """Return the longest of `phrases` (strings of words) that starts at words[i], or None."""
+    best = None
+    for p in phrases:
+        pw = p.split()
+        if words[i:i + len(pw)] == pw and (best is None or len(pw) > len(best.split())):
+            best = p
+    return best
+
+
+def find_phrase(words: list[str], phrases) -> list[tuple[int, str]]:
+    """Return (index, phrase) for each place one of `phrases` starts, left to right."""
+    found, i = [], 0
+    while i < len(words):
+        p = phrase_at(words, i, phrases)
+        if p is not None:
+            found.append((i, p))
+            i += len(p.split())
+        else:
+            i += 1
+    return found
+
+
+_SENTENCE_END = re.compile(r'(?<![0-9])[.!;]+(?=\s|$)|\?+|(?<=[a-z])[.](?=\s*[A-Za-z])')
+
+
+def sentences(text: str) -> list[str]:
+    """Return the sentences of a text ("1.5 m" is no sentence end)."""
+    return [s.strip() for s in _SENTENCE_END.split(text) if s and s.strip(' ,')]
+
+
+class Reader:
+    """
+    The reading of instructions for one entity table (its lexicon) and one network.
+
+    `known`: every word the network learned (its vocabulary); `model_names`: the network's
+    own landmark names, which are landmarks only on its own table (`own_table`).
+    """
+
+    def __init__(self, lexicon: Lexicon, known=frozenset(), model_names=(), own_table=True):
+        self.lexicon = lexicon
+        table_words = {w for p in lexicon.phrases for w in p}
+        self.classes = (
+            frozenset(DIRECTIONS) | frozenset(NUMBERS) | QUALIFIERS | CLAUSES | MAP_WORDS
+            | COMMON_WORDS | wording_words() | STOP_WORDS | GO_VERBS | FILLERS | DEICTIC
+            | PATH_WORDS | frozenset(LENGTH_UNITS) | frozenset(OPENING_VERBS)
+            | {w for p in (*NEGATIONS, *CORRECTIONS, *SEQUENCE_MARKS, *UNSUPPORTED,
+                           *QUESTION_OPENERS, *REQUEST_OPENERS) for w in tokenize(p)}
+        )  # fmt: skip
+        names = {w for n in model_names for w in tokenize(n.replace('_', ' '))}
+        # a word that says what a landmark is: on another table, the network's own names
+        # ("circle", "tree") and its other nouns name no kind of the user's
+        self.slot_known = self.classes | table_words | (frozenset(known) if own_table else set())
+        self.slot_known -= set() if own_table else names
+        self.vocab = frozenset(known)
+        self.known = self.classes | table_words | self.vocab
+        self.read = functools.lru_cache(maxsize=256)(self._read)
+
+    # -- stage 1 and 2: the text the speaker settled on ---------------------------------
+    def _read(self, text: str, cell_size: float | None = None) -> Command:
+        """Return the Command of an instruction (cached: a node reads one on every map)."""
+        parts = [tokenize(s) for s in sentences(digits(unpossessed(text)))]
+        words = [w for part in parts for w in part]
+        if not words:
+            raise ValueError('instruction has no words')
+        notes = []
+        kept = [w for w in words if w not in FILLERS]
+        request = phrase_at(kept, 0, REQUEST_OPENERS) is not None
+        question = self.asks(words) or (text.rstrip().endswith('?') and not request)
+        fixed = self.corrected(words)
+        if fixed is not None:
+            words = fixed
+            notes.append('corrected')
+        elif len(parts) > 1 and not question:
+            chosen = self.meeting_sentence(parts)
+            if chosen is not None:
+                words = chosen
+                notes.append('sentence')
+        return self.intent(text, words, question, cell_size, tuple(notes))
+
+    def corrected(self, words: list[str]) -> list[str] | None:
+        """
+        Return the words after the speaker's last correction, or None if there is none.
+
+        "the desk, no wait, the fridge": the fridge; "left of the sofa, sorry, I mean right of
+        it": "it" is the place said before the correction.
+        """
+        found = []
+        for i, p in find_phrase(words, CORRECTIONS):
+            after = words[i + len(p.split()):]
+            if p == 'no' and (i == 0 or not after):
+                continue  # "no, ..." opening a request, or a trailing "no"
+            if self.lexicon.mentions(after) or set(after) & {'it', 'its'}:
+                found.append((i, p))
+        if not found:
+            return None
+        i, p = found[-1]
+        before, after = words[:i], words[i + len(p.split()):]
+        earlier = self.lexicon.mentions(before)
+        if not self.lexicon.mentions(after) and earlier:
+            landmark = ['the', *earlier[-1].words]
+            after = [
+                x for w in after
+                for x in (landmark if w == 'it' else ['of', *landmark] if w == 'its' else [w])
+            ]  # fmt: skip
+        if after and after[0] not in GO_VERBS:
+            after = [w for w in before if w in GO_VERBS][:1] + after
+        return after
+
+    def meeting_sentence(self, parts: list[list[str]]) -> list[str] | None:
+        """Return the sentence that says where to go (a verb of going and a landmark)."""
+        named = [p for p in parts if self.lexicon.mentions(p) and not self.negated(p)]
+        going = [p for p in named if set(p) & GO_VERBS]
+        return (going or named or [None])[0]
+
+    # -- stage 3: the intent -----------------------------------------------------------
+    def asks(self, words: list[str]) -> bool:
+        """Say whether the words open as a question rather than a polite request."""
+        kept = [w for w in words if w not in FILLERS]
+        opener = phrase_at(kept, 0, REQUEST_OPENERS)
+        if opener is not None:
+            n = len(opener.split())
+            return not set(kept[n:n + 2]) & GO_VERBS
+        return phrase_at(kept, 0, QUESTION_OPENERS) is not None
+
+    def negated(self, words: list[str]) -> str | None:
+        """Return the negation of the request in the words ("don't", "avoid"), or None."""
+        for i, p in find_phrase(words, NEGATIONS):
+            rest = words[i + len(p.split()):]
+            if p in ("don't", 'dont', 'do not', 'never') and rest[:1] == ['mind']:
+                continue
+            if p in ('not the', 'not to', 'not at', 'not by', 'not near') and i > 0 and (
+                words[i - 1] not in FILLERS | {',', 'but', 'and'}
+            ) and self.lexicon.mentions(words[:i]) and not set(words[:i]) & {'but'}:
+                continue  # "the fridge, not the sofa": a correction, read as the fridge
+            return p
+        return None
+
+    def intent(self, text, words, question, cell_size, notes) -> Command:
+        mentions = self.lexicon.mentions(words)
+        content = [w for w in words if w not in FILLERS]
+        if not mentions and content and all(w in STOP_WORDS for w in content) and (
+            set(content) & STOP_HEADS
+        ):
+            return Command(text, 'stop', notes=notes)
+        negation = self.negated(words)
+        if question:
+            steps = (self.reference(words, cell_size),) if mentions else ()
+            return Command(text, 'question', steps, notes=notes)
+        if negation is not None:
+            return Command(
+                text, 'negation', (), f'negation: "{negation}" says where not to go', notes
+            )
+        positive = self.without_negative_clause(words)
+        if positive is not words:
+            words, mentions = positive, self.lexicon.mentions(positive)
+        if not mentions:
+            unknown = self.reference(words, cell_size)
+            if unknown.reason is not None and unknown.reason.startswith('unknown-landmark'):
+                return Command(text, 'go', (unknown,), None, notes)
+            found = find_phrase(content, UNSUPPORTED)
+            deictic = set(content) & DEICTIC
+            if found or deictic or not set(content) & (set(DIRECTIONS) | QUALIFIERS):
+                what = found[0][1] if found else ' '.join(content[:4])
+                return Command(
+                    text, 'unsupported', (),
+                    f'unsupported: "{what}" names no landmark or cell on the map', notes,
+                )  # fmt: skip
+        steps = self.steps(words)
+        if len(steps) > 1:
+            return Command(
+                text, 'sequence', tuple(self.reference(s, cell_size) for s in steps), None, notes
+            )
+        return Command(text, 'go', (self.reference(words, cell_size),), None, notes)
+
+    def without_negative_clause(self, words: list[str]) -> list[str]:
+        """Return the words without a "not the sofa" clause beside a place to go, if any."""
+        for i, p in find_phrase(words, ('not the', 'not to', 'not at', 'not by', 'not near')):
+            end = next((j for j in range(i + 2, len(words)) if words[j] in ('but', 'and')),
+                       len(words))
+            rest = words[:i] + words[end + 1 if end < len(words) else end:]
+            if self.lexicon.mentions(rest):
+                return [w for w in rest if w != 'but']
+        return words
+
+    def steps(self, words: list[str]) -> list[list[str]]:
+        """Return the steps of a several-step request, or the words as one step."""
+        marks = find_phrase(words, SEQUENCE_MARKS)
+        if not marks:
+            return [words]
+        cuts, start = [], 0
+        for i, p in marks:
+            cuts.append(words[start:i])
+            start = i + len(p.split())
+        cuts.append(words[start:])
+        cuts = [c[1:] if c[:1] == ['first'] else c for c in cuts]
+        cuts = [[w for w in c if w != 'and'] if c[-1:] == ['and'] else c for c in cuts if c]
+        if len(cuts) < 2 or not all(self.lexicon.mentions(c) for c in cuts):
+            return [words]
+        # "then to the horse on the left in that row": a step said of the one before
+        if any(set(c) & {'that', 'there', 'it', 'its', 'those'} for c in cuts[1:]):
+            return [words]
+        return cuts
+
+    # -- stages 4 and 5: one place, in the model's words ---------------------------------
+    def reference(self, words: list[str], cell_size: float | None) -> Reference:
+        """Return one step's Reference: its spelling read, its slots, its reading's reason."""
+        said = ' '.join(words)
+        words, spelled = self.spelled(words)
+        words = self.without_paths(words)
+        words = tokenize(count_first(in_cells(' '.join(words), cell_size)))
+        mentions = self.lexicon.mentions(words)
+        unknown = [
+            (i, w) for i, w in enumerate(words)
+            if w not in self.known and not any(m.start <= i < m.end for m in mentions)
+            and not w.isdigit()
+        ]  # fmt: skip
+        reason = self.reason_of(words, mentions, unknown)
+        slotted, slots = slot(words, mentions)
+        slotted = [w for w in slotted if w not in FILLERS] or slotted
+        canon = canonical(slotted, [i for i, w in enumerate(slotted) if is_slot(w)])
+        # the words the network learned and the slots: an unknown word cannot move the goal
+        kept = tidy([w for w in canon if w in self.vocab or is_slot(w) or w.isdigit()] or canon)
+        kept = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
+        kept = cell_for_fixed_target(kept, [i for i, w in enumerate(kept) if is_slot(w)])
+        return unslot(said, kept, slots, reason, tuple(w for _, w in unknown), tuple(spelled))
+
+    def spelled(self, words: list[str]) -> tuple[list[str], list[tuple[str, str]]]:
+        """Return the words with each misspelt relation word read as the word meant."""
+        mentions = self.lexicon.mentions(words)
+        out, spelled = [], []
+        for i, w in enumerate(words):
+            if w in self.known or w.isdigit() or any(m.start <= i < m.end for m in mentions):
+                out.append(w)
+                continue
+            meant = spelling(w)
+            if meant is not None:
+                spelled.append((w, meant))
+            out.append(meant or w)
+        return out, spelled
+
+    def without_paths(self, words: list[str]) -> list[str]:
+        """Return the words without a path passed ("down the hall", "across the street")."""
+        mentions = self.lexicon.mentions(words)
+        named = {i for m in mentions for i in range(m.start, m.end)}
+        out, i = [], 0
+        while i < len(words):
+            w = words[i]
+            if w in PATH_WORDS and i + 2 < len(words) and words[i + 1] in ARTICLES | {'this'}:
+                j = i + 2
+                while j < len(words) and j not in named and words[j] not in self.classes:
+                    j += 1
+                if j > i + 2 and (j == len(words) or words[j] not in ('of',)):
+                    i = j
+                    continue
+            out.append(w)
+            i += 1
+        return out
+
+    def reason_of(self, words, mentions, unknown) -> str | None:
+        """Return why the words alone leave no cell to go to, or None."""
+        text = f' {" ".join(words)} '
+        sideless = next((w for w in SIDELESS if f' {w} ' in text), None)
+        if mentions and sideless:
+            return f'ambiguous: "{sideless}" names no side on a map'
+        unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
+        if mentions and unlearned:
+            return f'unsupported: "{unlearned}" is no relation the model learned'
+        first = mentions[0].start if mentions else len(words)
+        for i, w in unknown:
+            nxt = words[i + 1] if i + 1 < len(words) else None
+            prev = words[i - 1] if i else None
+            if w in self.slot_known:
+                continue
+            # the referent's slot: a word that ends its phrase after an article or a relation
+            # ("below the piano", "go to the box"), before any landmark of the table
+            ends = nxt is None or nxt in CLAUSES | PHRASE_ENDS
+            before = BEFORE_A_NAME if not mentions else ARTICLES
+            if i < first and ends and prev in before:
+                return f'unknown-landmark: {w}'
+            # a word not understood where a direction or a count goes
+            if prev is not None and (prev in NUMBERS or prev in UNITS) or nxt in ('of', 'from'):
+                return f'unreadable: "{w}"'
+        if not mentions:
+            for i, w in enumerate(words):
+                if w in self.slot_known or w in self.classes:
+                    continue
+                prev = words[i - 1] if i else None
+                nxt = words[i + 1] if i + 1 < len(words) else None
+                if prev in BEFORE_A_NAME and (nxt is None or nxt in CLAUSES | PHRASE_ENDS):
+                    return f'unknown-landmark: {w}'
+        return None
+
+
+@functools.lru_cache(maxsize=4096)
+def spelling(word: str) -> str | None:
+    """Return the relation word a misspelt word is one edit from (two if long), or None."""
+    if len(word) < 3:
+        return None
+    limit = 1 if len(word) < 7 else 2
+    found = process.extract(word, SPELLING_TARGETS, scorer=OSA.distance, score_cutoff=limit,
+                            limit=2)
+    if not found or (len(found) > 1 and found[1][1] == found[0][1]):
+        return None
+    return found[0][0]
+
+
+def slot(words: list[str], mentions: list[Mention]) -> tuple[list[str], list[Mention]]:
+    """Return the words with each mention as one slot word ('@k'), and the mentions."""
+    out, slots, i = [], [], 0
+    starts = {m.start: m for m in mentions}
+    while i < len(words):
+        if i in starts:
+            out.append(f'{SLOT}{len(slots)}')
+            slots.append(starts[i])
+            i = starts[i].end
+        else:
+            out.append(words[i])
+            i += 1
+    return out, slots
+
+
+def unslot(said, words, slots, reason, unknown, spelled) -> Reference:
+    """Return the Reference of slotted words: each slot the mention's last word."""
+    out, mentions = [], []
+    for w in words:
+        if is_slot(w):
+            m = slots[int(w[1:])]
+            mentions.append(replace(m, start=len(out), end=len(out) + 1))
+            out.append(m.words[-1])
+        else:
+            out.append(w)
+    return Reference(said, tuple(out), tuple(mentions), reason, unknown, spelled)
+
+
+__all__ = ['Command', 'INTENTS', 'LEARNED_COUNT', 'Reader', 'Reference']
