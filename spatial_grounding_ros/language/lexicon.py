@@ -18,9 +18,12 @@ alone (`protected`: the relation words a model reads, so "three" never becomes "
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
+from importlib.resources import files
 from typing import Iterable
 
 import numpy as np
+from rapidfuzz.distance import OSA
 
 from ..core.entities import EntityTable
 from ..core.footprints import footprints
@@ -53,22 +56,20 @@ def singular(word: str) -> str:
 
 def within_one_edit(a: str, b: str) -> bool:
     """Return whether a and b differ by at most one substitution, insertion, deletion or swap."""
-    if a == b:
-        return True
-    if abs(len(a) - len(b)) > 1:
-        return False
-    if len(a) == len(b):
-        diff = [i for i, (x, y) in enumerate(zip(a, b)) if x != y]
-        if len(diff) == 1:
-            return True
-        return len(diff) == 2 and diff[1] == diff[0] + 1 and a[diff[0]] == b[diff[1]] and (
-            a[diff[1]] == b[diff[0]]
-        )
-    short, long_ = (a, b) if len(a) < len(b) else (b, a)
-    for i in range(len(long_)):
-        if long_[:i] + long_[i + 1:] == short:
-            return True
-    return False
+    return OSA.distance(a, b, score_cutoff=1) <= 1
+
+
+# a word this frequent in English text is a word of its own, never read as a typo of a name
+# ("hall" is no "wall", "street" no "tree"); rarer ones may be ("hose" for "horse")
+ENGLISH_MIN_COUNT = 20_000_000
+
+
+@functools.cache
+def english_words() -> frozenset[str]:
+    """Return the common English words of symspellpy's frequency dictionary."""
+    text = (files('symspellpy') / 'frequency_dictionary_en_82_765.txt').read_text()
+    words = (line.split() for line in text.splitlines())
+    return frozenset(w for w, n in words if int(n) >= ENGLISH_MIN_COUNT)
 
 
 def short_typo(word: str, name: str) -> bool:
@@ -118,6 +119,8 @@ class Lexicon:
         if exact is not None:
             return exact
         if len(word) < TYPO_MIN_LETTERS - 1 or word in self.protected:
+            return None
+        if word in english_words():
             return None
         close = {
             k

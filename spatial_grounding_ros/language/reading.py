@@ -90,6 +90,24 @@ INTENTS = ('go', 'stop', 'question', 'sequence', 'negation', 'unsupported')
 SLOT = '@'
 
 
+# the words a path passed ends before: where the place to go is said
+PATH_ENDS = (
+    frozenset('to toward towards and then until till at by near next beside of from for'.split())
+    | frozenset(DIRECTIONS) | frozenset(NUMBERS) | GO_VERBS
+)
+
+
+def sided(words: list[str]) -> list[str]:
+    """Return the words with a bare "left of" said as the model learned it: "to the left of"."""
+    out = []
+    for i, w in enumerate(words):
+        bare = i == 0 or words[i - 1] not in ('the', 'its', 'your', 'my')
+        if w in ('left', 'right') and words[i + 1:i + 2] == ['of'] and bare:
+            out += ['to', 'the']
+        out.append(w)
+    return out
+
+
 def is_slot(word: str) -> bool:
     return word.startswith(SLOT)
 # the words a misspelt word may be read as (one edit; two for words of seven letters or more)
@@ -264,9 +282,15 @@ class Reader:
         return after
 
     def meeting_sentence(self, parts: list[list[str]]) -> list[str] | None:
-        """Return the sentence that says where to go (a verb of going and a landmark)."""
-        named = [p for p in parts if self.lexicon.mentions(p) and not self.negated(p)]
-        going = [p for p in named if set(p) & GO_VERBS]
+        """
+        Return the sentence that says where to go or meet, or None.
+
+        The first that asks to go (a verb of going, not negated), else the first that names a
+        landmark; the others are context ("It is across the street from the bank.").
+        """
+        said = [p for p in parts if not self.negated(p)]
+        going = [p for p in said if set(p) & GO_VERBS]
+        named = [p for p in said if self.lexicon.mentions(p)]
         return (going or named or [None])[0]
 
     # -- stage 3: the intent -----------------------------------------------------------
@@ -316,6 +340,10 @@ class Reader:
                 return Command(text, 'go', (unknown,), None, notes)
             found = find_phrase(content, UNSUPPORTED)
             deictic = set(content) & DEICTIC
+            if unknown.unknown_words and not found:
+                words_said = ', '.join(f'"{w}"' for w in unknown.unknown_words)
+                return Command(text, 'go', (replace(unknown, reason=f'unreadable: {words_said}'),),
+                               None, notes)
             if found or deictic or not set(content) & (set(DIRECTIONS) | QUALIFIERS):
                 what = found[0][1] if found else ' '.join(content[:4])
                 return Command(
@@ -362,9 +390,14 @@ class Reader:
     def reference(self, words: list[str], cell_size: float | None) -> Reference:
         """Return one step's Reference: its spelling read, its slots, its reading's reason."""
         said = ' '.join(words)
+        kept = [w for w in words if w not in FILLERS]
+        opener = phrase_at(kept, 0, REQUEST_OPENERS)  # "could you head over to": a request
+        if opener is not None:
+            words = kept[len(opener.split()):] or words
         words, spelled = self.spelled(words)
         words = self.without_paths(words)
         words = tokenize(count_first(in_cells(' '.join(words), cell_size)))
+        words = sided(words)
         mentions = self.lexicon.mentions(words)
         unknown = [
             (i, w) for i, w in enumerate(words)
@@ -396,20 +429,20 @@ class Reader:
         return out, spelled
 
     def without_paths(self, words: list[str]) -> list[str]:
-        """Return the words without a path passed ("down the hall", "across the street")."""
-        mentions = self.lexicon.mentions(words)
-        named = {i for m in mentions for i in range(m.start, m.end)}
+        """Return the words without a path passed ("down the hall", "across the room")."""
+        named = {i for m in self.lexicon.mentions(words) for i in range(m.start, m.end)}
         out, i = [], 0
         while i < len(words):
-            w = words[i]
-            if w in PATH_WORDS and i + 2 < len(words) and words[i + 1] in ARTICLES | {'this'}:
+            if words[i] in PATH_WORDS and words[i + 1:i + 2] and words[i + 1] in ARTICLES:
                 j = i + 2
-                while j < len(words) and j not in named and words[j] not in self.classes:
+                while j < len(words) and j not in named and words[j] not in PATH_ENDS:
                     j += 1
-                if j > i + 2 and (j == len(words) or words[j] not in ('of',)):
-                    i = j
+                # a path ends before the place: "down the hall to the fridge"; "down the side
+                # of the sofa" or "up the fridge" are no path
+                if j > i + 2 and j < len(words) and j not in named and words[j] != 'of':
+                    i = j + (words[j] == 'and')
                     continue
-            out.append(w)
+            out.append(words[i])
             i += 1
         return out
 

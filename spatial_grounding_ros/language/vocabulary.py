@@ -91,7 +91,7 @@ LENGTH_UNITS = {
 # words that pass time in a request and never matter ("um okay robot ... thanks")
 FILLERS = frozenset(
     """
-    please um uh erm hmm ok okay hey hi hello robot buddy thanks thank you kindly just
+    please um uh erm hmm ok okay hey hi hello robot buddy thanks kindly just
     alright quickly carefully slowly yeah yes sure mate pal friend dear
     """.split()
 )

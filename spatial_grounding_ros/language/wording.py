@@ -69,7 +69,9 @@ PHRASES = {
         'go to', 'move to', 'drive to', 'navigate to', 'head to', 'travel to', 'get to',
         'proceed to', 'stop on', 'stop at', 'park on', 'park at', 'go', 'move', 'drive',
         'navigate', 'head', 'find', 'stop', 'park', 'wait', 'go over to', 'head over to',
-        'come to', 'take me to',
+        'come to', 'take me to', 'walk to', 'walk over to', 'roll to', 'meet me at',
+        'meet me by', 'meet me near', 'meet at', 'wait at', 'wait by', 'stop by', 'head for',
+        'make your way to', 'drive over to', 'move over to',
     ],
     'cell': ['square', 'spot', 'tile', 'space', 'position', 'place', 'location', 'area'],
     # an ordinal cell is a count: "the second square below the sink"

@@ -1,0 +1,235 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The one reading of an instruction (language/reading.py), as a robot's user talks to it.
+
+Each wording here was written as a person says it to a robot, before looking at how the
+reader takes it; the cells are worked out by hand on the office map below.
+"""
+
+import numpy as np
+import pytest
+
+from spatial_grounding_ros.grounder import Grounder
+from spatial_grounding_ros.language.reading import INTENTS
+from spatial_grounding_ros.language.units import digits, in_cells
+
+OFFICE = 'config/entities_office.yaml'
+
+
+@pytest.fixture(scope='module')
+def office():
+    return Grounder.from_checkpoint(entities=OFFICE, cell_size=0.5)
+
+
+@pytest.fixture(scope='module')
+def puddleworld():
+    return Grounder.from_checkpoint()
+
+
+def office_map(grounder) -> np.ndarray:
+    """A 12x12 office: walls on the top row and left column; one of each landmark but chairs."""
+    names = grounder.entities.names
+    grid = np.zeros((12, 12), dtype=np.int64)
+    grid[0, :] = grid[:, 0] = names.index('wall')
+    for name, cell in (('fridge', (3, 3)), ('sofa', (8, 6)), ('desk', (5, 9)),
+                       ('chair', (2, 8)), ('chair', (9, 2))):  # fmt: skip
+        grid[cell] = names.index(name)
+    return grid
+
+
+@pytest.mark.parametrize(
+    'text, intent',
+    [
+        ('stop', 'stop'),
+        ('Stop!', 'stop'),
+        ('halt', 'stop'),
+        ('cancel that', 'stop'),
+        ('never mind', 'stop'),
+        ('robot, stop right there please', 'stop'),
+        ('where is the fridge?', 'question'),
+        ('is there a printer?', 'question'),
+        ('hey robot, can you see the sofa?', 'question'),
+        ('which way to the desk', 'question'),
+        ("don't go to the fridge", 'negation'),
+        ('do not go near the sofa', 'negation'),
+        ('avoid the desk', 'negation'),
+        ('anywhere but the fridge', 'negation'),
+        ('never drive to the sofa', 'negation'),
+        ('follow me', 'unsupported'),
+        ('come here', 'unsupported'),
+        ('turn left', 'unsupported'),
+        ('go back', 'unsupported'),
+        ('go there', 'unsupported'),
+        ('go to the fridge and then the sofa', 'sequence'),
+        ('first the desk, then two cells below the fridge', 'sequence'),
+        ('go to the fridge after that the desk', 'sequence'),
+        ('can you go to the fridge?', 'go'),
+        ('could you please drive two cells below the sofa?', 'go'),
+        ('the desk, no wait, the fridge', 'go'),
+        ('go two cells left of the sofa', 'go'),
+    ],
+)
+def test_each_intent_is_read(office, text, intent):
+    assert intent in INTENTS
+    result = office.ground(office_map(office), text)
+    assert result.intent == intent, (text, result.intent, result.reason)
+    if intent not in ('go', 'sequence'):
+        assert result.goal is None  # a stop, a question or a decline never sends a goal
+    if intent in ('negation', 'unsupported'):
+        assert result.reason.startswith(intent)
+
+
+def test_a_question_answers_in_words_and_cell(office):
+    grid = office_map(office)
+    where = office.ground(grid, 'where is the fridge?')
+    assert where.goal is None and where.referent == (3, 3) and 'fridge' in where.answer
+    missing = office.ground(grid, 'is there a printer?')
+    assert missing.goal is None and missing.referent is None and 'no printer' in missing.answer
+
+
+def test_a_sequence_grounds_each_step_in_order(office):
+    result = office.ground(office_map(office), 'go two cells below the sofa, then one above the desk')
+    assert result.intent == 'sequence'
+    assert [s.goal for s in result.steps] == [(10, 6), (4, 9)]
+    assert result.goal == (10, 6)  # the first step's: the node sends it first
+
+
+def test_a_one_reference_then_is_no_sequence(puddleworld):
+    """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[5, 5] = 6  # spade
+    result = puddleworld.ground(grid, 'reach cell one up then one left from the spade')
+    assert result.intent == 'go' and result.goal == (4, 4)
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('the desk, no wait, the fridge', (3, 3)),
+        ('two cells below the fridge, sorry, I mean the sofa', (8, 6)),
+        ('go one left of the sofa, sorry, I mean one right of it', (8, 7)),
+        ('go to the fridge, not the sofa', (3, 3)),
+    ],
+)
+def test_a_self_correction_means_the_last_place_said(office, text, goal):
+    assert office.ground(office_map(office), text).goal == goal
+
+
+@pytest.mark.parametrize(
+    'text',
+    [
+        'one cell abvoe the sofa',
+        'one cell obove the sofa',
+        'one cell aboev the sofa',
+    ],
+)
+def test_a_misspelt_direction_is_read_as_meant(office, text):
+    assert office.ground(office_map(office), text).goal == (7, 6)
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('two cells undr the sofa', (10, 6)),
+        ('two cells wset of the sofa', (8, 4)),
+        ('two cells to the rigth of the sofa', (8, 8)),
+        ('go to the fridgee', (3, 3)),
+        ('two cells left of the sfoa', (8, 4)),
+    ],
+)
+def test_misspellings_of_relations_and_names(office, text, goal):
+    assert office.ground(office_map(office), text).goal == goal
+
+
+def test_a_word_not_understood_where_it_changes_the_goal_declines(office):
+    grid = office_map(office)
+    result = office.ground(grid, 'two cells xqzv of the sofa')
+    assert result.goal is None and result.reason_code == 'unreadable'
+    assert 'xqzv' in result.reason
+    assert office.ground(grid, 'go to the fr dge').reason_code == 'unreadable'
+    # filler and politeness never matter
+    assert office.ground(grid, 'um okay robot kindly go two cells below the sofa thanks').goal == (
+        10, 6
+    )
+
+
+@pytest.mark.parametrize(
+    'text, cells',
+    [
+        ('6 feet north of the lamp', '4 north of the lamp'),  # 1.83 m at 0.5 m: 4 cells
+        ('two yards south of it', '4 south of it'),
+        ('a metre and a half east', '3 east'),
+        ('one and a half metres east', '3 east'),
+        ('half a metre above', '1 above'),
+        ('1.5 m left', '3 left'),
+        ('50 cm north', '1 north'),
+        ('150 centimetres north', '3 north'),
+    ],
+)
+def test_lengths_in_units_people_use(text, cells):
+    assert in_cells(digits(text), 0.5) == cells
+
+
+def test_number_words_past_three_become_digits_and_small_ones_stay_words():
+    assert digits('go six cells below the rock') == 'go 6 cells below the rock'
+    assert digits('go twenty one cells left') == 'go 21 cells left'
+    assert digits('go two cells below the rock') == 'go two cells below the rock'
+
+
+def test_one_reading_for_checks_and_model(puddleworld):
+    """With the star in column 0, both wordings of one cell left of it are off the map."""
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[4, 0] = 2
+    for text in ('reach one to the left of the star', 'reach the star and one to its left'):
+        result = puddleworld.ground(grid, text)
+        assert result.goal is None and result.reason == 'off-map', text
+        assert result.model_instruction == 'reach one to the left of the star'
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('Meet me at the sofa. It is across the street from the desk.', (8, 6)),
+        ("I'm in the kitchen area. Meet me at the fridge. It's across from the sofa.", (3, 3)),
+        ("There's a chair by the door; please wait one cell right of the sofa", (8, 7)),
+        ('go down the hall to the fridge', (3, 3)),
+        ('walk across the room to the sofa', (8, 6)),
+        ('head along the corridor and go two cells below the sofa', (10, 6)),
+    ],
+)
+def test_long_descriptions_and_ordinary_nouns(office, text, goal):
+    assert office.ground(office_map(office), text).goal == goal
+
+
+def test_only_the_referents_slot_can_be_unknown(office):
+    grid = office_map(office)
+    meet = office.ground(grid, 'Meet me at the bakery on the corner. It is across from the desk.')
+    assert meet.goal is None and meet.reason == 'unknown-landmark: bakery'
+    piano = office.ground(grid, 'go two cells below the piano near the fridge')
+    assert piano.reason == 'unknown-landmark: piano'
+
+
+@pytest.mark.parametrize(
+    'text, word',
+    [
+        ('go to the circle', 'circle'),
+        ('go to the box', 'box'),
+        ('two cells below the tree', 'tree'),
+    ],
+)
+def test_the_models_own_names_are_no_landmarks_of_another_table(office, text, word):
+    result = office.ground(office_map(office), text)
+    assert result.goal is None and result.reason == f'unknown-landmark: {word}'
+
+
+def test_a_common_english_word_is_no_typo_of_a_name(office):
+    """ "hall" is one letter from "wall", and still a hall."""
+    assert office.lexicon.mentions('go down the hall') == []
+    assert [m.kind for m in office.lexicon.mentions('go to the fridgee')] == [
+        office.entities.index('fridge')
+    ]
