@@ -233,3 +233,35 @@ def test_a_common_english_word_is_no_typo_of_a_name(office):
     assert [m.kind for m in office.lexicon.mentions('go to the fridgee')] == [
         office.entities.index('fridge')
     ]
+
+
+def test_every_generator_family_reads_back_as_the_place_it_names(puddleworld):
+    """
+    The round trip of the generator's instructions through the reading.
+
+    Each generated instruction reads as one `go` place with no word left unread and no
+    reason to decline; an offset family's reading gives back the offset the generator
+    rendered (goal minus its landmark's cell), an extreme's its extreme word, and the network
+    reads the words the checks read.
+    """
+    from spatial_grounding_ros.data.generator import FAMILIES, FAMILY_OFFSETS, sample
+    from spatial_grounding_ros.language.checks import EXTREME_SIDES, mention_offsets
+
+    rng = np.random.default_rng(0)
+    reader = puddleworld.reader
+    for family in FAMILIES:
+        for _ in range(12):
+            grid, text, goal = sample(rng, family, 10)
+            command = reader.read(text)
+            assert command.intent == 'go' and len(command.steps) == 1, text
+            ref = command.reference
+            assert ref.reason is None and ref.unknown_words == (), text
+            assert ref.mentions, text
+            names = {m.kind: puddleworld.entities.names[m.kind] for m in ref.mentions}
+            assert ref.model_words(names)[0] == list(ref.words), text
+            if family in FAMILY_OFFSETS:
+                (m, offset), = mention_offsets(list(ref.words), list(ref.mentions))
+                cell = np.argwhere(grid == m.kind)[0]
+                assert offset == (goal[0] - cell[0], goal[1] - cell[1]), text
+            if family.startswith('extreme'):
+                assert set(ref.words) & set(EXTREME_SIDES), text
