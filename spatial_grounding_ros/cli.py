@@ -248,9 +248,9 @@ def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, bags, the suite, honest answers and calibration, ShapeWorld's, robustness, explain,
-    and the closed-loop demo, which needs rclpy (without it, every other subcommand still
-    works).
+    bench, bags, the suite, honest answers and calibration, natural instructions, ShapeWorld's,
+    robustness, explain, and the closed-loop demo, which needs rclpy (without it, every other
+    subcommand still works).
     """
     from .data import bags
     from .shapeworld import commands as shapeworld
@@ -261,6 +261,7 @@ def _extensions():
         ground,
         honesty,
         kinds_ablation,
+        natural,
         robustness,
         suite,
     )
@@ -271,6 +272,7 @@ def _extensions():
         suite.register_cli,
         ground.register_cli,
         honesty.register_cli,
+        natural.register_cli,
         kinds_ablation.register_cli,
         calibration.register_cli,
         shapeworld.register_cli,

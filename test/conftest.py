@@ -57,6 +57,7 @@ FAST = {
     'test_bags': (),
     'test_bag_recorder': (),
     'test_copyright': (),
+    'test_natural_cases': (),
 }
 
 
