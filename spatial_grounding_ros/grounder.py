@@ -45,6 +45,10 @@ IMAGES = ((), *MIRROR_IMAGES)
 MIRROR_AVERAGE_CELLS = 128 * 128
 
 
+# the least calibrated confidence a goal is sent with (docs/honest-answers.md has the
+# trade-off): under it a grounding declines, low-confidence
+DEFAULT_MIN_CONFIDENCE = 0.0
+
 # how many next-best cells a grounding reports
 ALTERNATIVES = 3
 # the reasons a grounding may decline with (language/checks.py has the structural ones)
@@ -145,7 +149,7 @@ class Grounder:
         self,
         loaded: Loaded,
         entities: EntityTable | None = None,
-        min_confidence: float = 0.0,
+        min_confidence: float = DEFAULT_MIN_CONFIDENCE,
         cached_instructions: int = 64,
         cell_size: float | None = None,
         kinds_by: str = 'name',
@@ -207,7 +211,7 @@ class Grounder:
         cls,
         checkpoint: str | Path = DEFAULT_CHECKPOINT,
         entities: str | Path | EntityTable | None = None,
-        min_confidence: float = 0.0,
+        min_confidence: float = DEFAULT_MIN_CONFIDENCE,
         cell_size: float | None = None,
         mirror_average_cells: int = MIRROR_AVERAGE_CELLS,
     ) -> 'Grounder':

@@ -139,7 +139,7 @@ def test_a_misspelt_direction_is_read_as_meant(office, text):
         ('two cells wset of the sofa', (8, 4)),
         ('two cells to the rigth of the sofa', (8, 8)),
         ('go to the fridgee', (3, 3)),
-        ('two cells left of the sfoa', (8, 4)),
+        ('two cells to the left of the sfoa', (8, 4)),
     ],
 )
 def test_misspellings_of_relations_and_names(office, text, goal):

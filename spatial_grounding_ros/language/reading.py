@@ -97,25 +97,19 @@ PATH_ENDS = (
 )
 
 
-def sided(words: list[str]) -> list[str]:
-    """Return the words with a bare "left of" said as the model learned it: "to the left of"."""
-    out = []
-    for i, w in enumerate(words):
-        bare = i == 0 or words[i - 1] not in ('the', 'its', 'your', 'my')
-        if w in ('left', 'right') and words[i + 1:i + 2] == ['of'] and bare:
-            out += ['to', 'the']
-        out.append(w)
-    return out
+# the words after a direction's slot: "two cells <direction> of the sofa"
+DIRECTION_ENDS = frozenset('of from the a an to'.split())
 
 
 def is_slot(word: str) -> bool:
     return word.startswith(SLOT)
-# the words a misspelt word may be read as (one edit; two for words of seven letters or more)
+# the words a misspelt word may be read as (one edit; two for words of seven letters or more):
+# the words that move the goal. Verbs and fillers are not among them: a misspelt verb moves
+# nothing, and "hea" is likelier a name cut short than "head"
 SPELLING_TARGETS = tuple(
     sorted(
         set(DIRECTIONS) | set(EXTREME_SIDES) | set(w for w in NUMBERS if w.isalpha())
-        | set(UNITS) | set(LENGTH_UNITS) | GO_VERBS | RELATION_WORDS
-        | {w for p in PHRASES if p for w in tokenize(p)}
+        | set(UNITS) | set(LENGTH_UNITS) | RELATION_WORDS
         | set('closest nearest farthest furthest between next beside cell square'.split())
     )
 )
@@ -283,15 +277,20 @@ class Reader:
 
     def meeting_sentence(self, parts: list[list[str]]) -> list[str] | None:
         """
-        Return the sentence that says where to go or meet, or None.
+        Return the description from the sentence that says where to go or meet, or None.
 
-        The first that asks to go (a verb of going, not negated), else the first that names a
-        landmark; the others are context ("It is across the street from the bank.").
+        What comes before it is context ("I'm in the kitchen. Meet me at the fridge."); what
+        comes after may say more of the place ("It is across from the sofa", "the cell is two
+        left of the star"), and is kept, but only the place's own sentence can name an
+        unknown landmark.
         """
-        said = [p for p in parts if not self.negated(p)]
-        going = [p for p in said if set(p) & GO_VERBS]
-        named = [p for p in said if self.lexicon.mentions(p)]
-        return (going or named or [None])[0]
+        said = [k for k, p in enumerate(parts) if not self.negated(p)]
+        going = [k for k in said if set(parts[k]) & GO_VERBS]
+        named = [k for k in said if self.lexicon.mentions(parts[k])]
+        start = (going or named or [None])[0]
+        if not start:  # the first sentence, or none: the words as they are
+            return None
+        return [w for p in parts[start:] for w in p]
 
     # -- stage 3: the intent -----------------------------------------------------------
     def asks(self, words: list[str]) -> bool:
@@ -397,7 +396,6 @@ class Reader:
         words, spelled = self.spelled(words)
         words = self.without_paths(words)
         words = tokenize(count_first(in_cells(' '.join(words), cell_size)))
-        words = sided(words)
         mentions = self.lexicon.mentions(words)
         unknown = [
             (i, w) for i, w in enumerate(words)
@@ -467,8 +465,12 @@ class Reader:
             before = BEFORE_A_NAME if not mentions else ARTICLES
             if i < first and ends and prev in before:
                 return f'unknown-landmark: {w}'
-            # a word not understood where a direction or a count goes
-            if prev is not None and (prev in NUMBERS or prev in UNITS) or nxt in ('of', 'from'):
+            # a word not understood where a direction goes: after a count (and its unit),
+            # before the landmark ("two cells xqzv of the sofa", "one undr the sofa")
+            counted = prev in NUMBERS or (
+                prev in UNITS and i > 1 and words[i - 2] in NUMBERS
+            )
+            if counted and (nxt in DIRECTION_ENDS or any(m.start == i + 1 for m in mentions)):
                 return f'unreadable: "{w}"'
         if not mentions:
             for i, w in enumerate(words):

@@ -51,7 +51,7 @@ NEGATIONS = (
     "don't", 'dont', 'do not', 'never', 'avoid', 'stay away', 'keep away', 'keep clear',
     'steer clear', 'anywhere but', 'anywhere except', 'anywhere other than', 'except',
     'other than', 'not to', 'not near', 'not at', 'not the', 'not go', 'not by',
-    'away from', "shouldn't", 'should not', 'must not', "mustn't", 'no need to go',
+    "shouldn't", 'should not', 'must not', "mustn't", 'no need to go',
 )
 # "X, no wait, Y": the speaker's last word on the place is the one meant
 CORRECTIONS = (
@@ -62,7 +62,7 @@ CORRECTIONS = (
 # what separates the steps of a several-step request ("the fridge, then the sofa")
 SEQUENCE_MARKS = (
     'and then', 'then', 'after that', 'afterwards', 'after which', 'followed by',
-    'and after that', 'next', 'finally', 'and finally', 'and lastly', 'lastly',
+    'and after that', 'finally', 'and finally', 'and lastly', 'lastly',
 )
 # requests a goal cell cannot answer: a motion, a person, a place only pointed at
 UNSUPPORTED = (

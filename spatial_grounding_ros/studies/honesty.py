@@ -35,7 +35,7 @@ from ..core import world
 from ..data.datasets import DEFAULT_DATA, load_task
 from ..data.generator import FAMILIES
 from ..data.unanswerable import cases, KINDS, REASONS
-from ..grounder import Grounder
+from ..grounder import DEFAULT_MIN_CONFIDENCE, Grounder
 from ..training.options import ranged
 
 HUMAN_TASKS = ('pw-local', 'pw-global')
@@ -45,7 +45,7 @@ def unanswerable(grounder: Grounder, sizes, n: int, seed: int, progress: bool) -
     out = {}
     jobs = [(kind, size) for size in sizes for kind in KINDS]
     for kind, size in tqdm(jobs, desc='unanswerable', disable=not progress):
-        found = [grounder.ground(g, t).reason_code for g, t in cases(kind, size, n, seed)]
+        found = [reason(grounder.ground(g, t)) for g, t in cases(kind, size, n, seed)]
         out.setdefault(kind, {})[str(size)] = {
             'declined': float(np.mean([r is not None for r in found])),
             'right_reason': float(np.mean([r == REASONS[kind] for r in found])),
@@ -54,10 +54,28 @@ def unanswerable(grounder: Grounder, sizes, n: int, seed: int, progress: bool) -
     return out
 
 
-def answered(groundings, goals) -> dict:
-    """Decline rate, hit rates, and what calibration needs, of groundings and their goals."""
+# the min_confidence values whose trade-off the study tables (docs/honest-answers.md)
+THRESHOLDS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.5)
+
+
+def reason(grounding) -> str | None:
+    """Return a grounding's reason code at the shipped min_confidence."""
+    if grounding.goal is not None and grounding.confidence < DEFAULT_MIN_CONFIDENCE:
+        return 'low-confidence'
+    return grounding.reason_code
+
+
+def answered(groundings, goals, min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> dict:
+    """
+    Decline rate, hit rates, and what calibration needs, of groundings and their goals.
+
+    The groundings are made at min_confidence 0; a goal under `min_confidence` counts as the
+    grounder's decline (its last check), and THRESHOLDS' rates are given beside.
+    """
     hits = np.array([g.best == tuple(goal) for g, goal in zip(groundings, goals)])
-    given = np.array([g.goal is not None for g in groundings])
+    sent = np.array([g.goal is not None for g in groundings])
+    sure = np.array([g.confidence for g in groundings])
+    given = sent & (sure >= min_confidence)
     distance = [
         abs(g.best[0] - goal[0]) + abs(g.best[1] - goal[1]) for g, goal in zip(groundings, goals)
     ]
@@ -70,7 +88,17 @@ def answered(groundings, goals) -> dict:
         'hit_answered': float(hits[given].mean()) if given.any() else None,
         'confidence': [g.confidence for g, a in zip(groundings, given) if a],
         'correct': [bool(h) for h, a in zip(hits, given) if a],
-        'reasons': sorted({g.reason_code for g in groundings if g.reason_code}),
+        'reasons': sorted(
+            {g.reason_code for g in groundings if g.reason_code}
+            | ({'low-confidence'} if (sent & ~given).any() else set())
+        ),
+        'thresholds': {
+            str(t): {
+                'declined': float(1 - (sent & (sure >= t)).mean()),
+                'hit_all': float((hits & sent & (sure >= t)).mean()),
+            }
+            for t in THRESHOLDS
+        },
     }
 
 
@@ -105,10 +133,13 @@ def run_honesty(
     seed: int = 1,
     progress: bool = True,
 ) -> dict:
-    grounder = Grounder.from_checkpoint(checkpoint)
+    # every goal is kept here; the shipped min_confidence is applied to the answers, and the
+    # other THRESHOLDS beside it
+    grounder = Grounder.from_checkpoint(checkpoint, min_confidence=0.0)
     result = {
         'checkpoint': checkpoint,
         'temperature': grounder.temperature,
+        'min_confidence': DEFAULT_MIN_CONFIDENCE,
         'unanswerable': unanswerable(grounder, sizes, n, seed, progress),
         'suite': clear(grounder, (*sizes, 64), suite_n, progress),
     }
@@ -159,6 +190,19 @@ def markdown(result: dict) -> str:
             + (', '.join(r['reasons']) or '-')
             + ' |'
         )
+    lines += [
+        '',
+        f'The shipped min_confidence is {result["min_confidence"]:g}. Declined / hit of all at '
+        'other values:',
+        '',
+        '| min_confidence | ' + ' | '.join(name for name, _ in rows) + ' |',
+        '| --- | ' + ' | '.join('---' for _ in rows) + ' |',
+    ]
+    for t in THRESHOLDS:
+        lines.append(f'| {t:g} | ' + ' | '.join(
+            f'{r["thresholds"][str(t)]["declined"]:.1%} / {r["thresholds"][str(t)]["hit_all"]:.1%}'
+            for _, r in rows
+        ) + ' |')
     lines += ['', 'Expected calibration error of the answers given (10 bins): '
               + ', '.join(f'{k} {v:.3f}' for k, v in result['ece'].items()) + '.']
     return '\n'.join(lines) + '\n'
