@@ -61,6 +61,7 @@ from .vocabulary import (
     FILLERS,
     GO_VERBS,
     LENGTH_UNITS,
+    MOTIONS,
     NEGATIONS,
     PATH_WORDS,
     QUESTION_OPENERS,
@@ -72,6 +73,7 @@ from .vocabulary import (
 )
 from .wording import (
     canonical,
+    cell_before_count,
     cell_for_fixed_target,
     count_first,
     OPENING_VERBS,
@@ -227,14 +229,17 @@ class Reader:
     # -- stage 1 and 2: the text the speaker settled on ---------------------------------
     def _read(self, text: str, cell_size: float | None = None) -> Command:
         """Return the Command of an instruction (cached: a node reads one on every map)."""
-        parts = [tokenize(s) for s in sentences(digits(unpossessed(text)))]
+        said = count_first(in_cells(digits(unpossessed(text)), cell_size))
+        parts = [tokenize(s) for s in sentences(said)]
         words = [w for part in parts for w in part]
         if not words:
             raise ValueError('instruction has no words')
         notes = []
-        kept = [w for w in words if w not in FILLERS]
-        request = phrase_at(kept, 0, REQUEST_OPENERS) is not None
-        question = self.asks(words) or (text.rstrip().endswith('?') and not request)
+        # a question opens as one, or ends in "?" asking no one to go anywhere ("can you go
+        # to the fridge?" and "let's go right of the spade, cool?" are requests)
+        question = self.asks(parts[-1]) or (
+            text.rstrip().endswith('?') and not set(words) & GO_VERBS
+        )
         fixed = self.corrected(words)
         if fixed is not None:
             words = fixed
@@ -258,12 +263,22 @@ class Reader:
             after = words[i + len(p.split()):]
             if p == 'no' and (i == 0 or not after):
                 continue  # "no, ..." opening a request, or a trailing "no"
-            if self.lexicon.mentions(after) or set(after) & {'it', 'its'}:
+            counted = any(w in NUMBERS for w in words[:i])
+            if self.lexicon.mentions(after) or set(after) & {'it', 'its'} or (
+                counted and after and all(w in NUMBERS or w in UNITS for w in after)
+            ):
                 found.append((i, p))
         if not found:
             return None
         i, p = found[-1]
         before, after = words[:i], words[i + len(p.split()):]
+        counts = [k for k, w in enumerate(before) if w in NUMBERS]
+        if counts and after and all(w in NUMBERS or w in UNITS for w in after):
+            # "three cells below the fridge, sorry, two": the count said again
+            return [*before[:counts[-1]], after[0], *before[counts[-1] + 1:]]
+        if counts and after and after[0] in DIRECTIONS:
+            # "one cell right of the circle, no, left of it": the count said before stays
+            after = before[counts[-1]:counts[-1] + 1] + after
         earlier = self.lexicon.mentions(before)
         if not self.lexicon.mentions(after) and earlier:
             landmark = ['the', *earlier[-1].words]
@@ -333,6 +348,10 @@ class Reader:
         positive = self.without_negative_clause(words)
         if positive is not words:
             words, mentions = positive, self.lexicon.mentions(positive)
+        motion = find_phrase(content[:2], MOTIONS)
+        if motion:  # "follow the wall", "turn towards the door": a motion, not a place
+            return Command(text, 'unsupported', (),
+                           f'unsupported: "{motion[0][1]}" asks for a motion, not a place', notes)
         if not mentions:
             unknown = self.reference(words, cell_size)
             if unknown.reason is not None and unknown.reason.startswith('unknown-landmark'):
@@ -395,7 +414,6 @@ class Reader:
             words = kept[len(opener.split()):] or words
         words, spelled = self.spelled(words)
         words = self.without_paths(words)
-        words = tokenize(count_first(in_cells(' '.join(words), cell_size)))
         mentions = self.lexicon.mentions(words)
         unknown = [
             (i, w) for i, w in enumerate(words)
@@ -410,6 +428,7 @@ class Reader:
         kept = tidy([w for w in canon if w in self.vocab or is_slot(w) or w.isdigit()] or canon)
         kept = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_for_fixed_target(kept, [i for i, w in enumerate(kept) if is_slot(w)])
+        kept = cell_before_count(kept)
         return unslot(said, kept, slots, reason, tuple(w for _, w in unknown), tuple(spelled))
 
     def spelled(self, words: list[str]) -> tuple[list[str], list[tuple[str, str]]]:

@@ -21,7 +21,7 @@ STOP_WORDS = frozenset(
     """
     stop halt cancel abort freeze nevermind never mind forget stay hold wait still stand
     that it this everything all goal mission task now right there here put moving move
-    don't dont do not emergency please robot the immediately at once
+    don't dont do not emergency please robot the immediately at once on
     """.split()
 )
 # ... at least one of these must be there for a stop
@@ -73,6 +73,8 @@ UNSUPPORTED = (
     'go right', 'move left', 'move right', 'go up', 'go down', 'move back', 'move up',
     'move down', 'keep going', 'go ahead', 'get closer', 'come closer', 'back off',
 )
+# a motion asked for, whatever it names ("follow the wall", "turn towards the door")
+MOTIONS = ('follow', 'turn', 'spin', 'rotate', 'dance', 'explore', 'wander', 'patrol')
 # words that point at a place or thing said before or shown, never named ("go there")
 DEICTIC = frozenset('there here it that this them me us you'.split())
 # "across the street", "down the hall": a path or a place passed, not the place to go
