@@ -21,11 +21,15 @@ STOP_WORDS = frozenset(
     """
     stop halt cancel abort freeze nevermind never mind forget stay hold wait still stand
     that it this everything all goal mission task now right there here put moving move
-    don't dont do not emergency please robot the immediately at once on
+    don't dont do not emergency please robot the immediately at once on enough that's quit
+    pause brake where you are your tracks
     """.split()
 )
 # ... at least one of these must be there for a stop
-STOP_HEADS = frozenset('stop halt cancel abort freeze nevermind mind forget stay hold wait'.split())
+STOP_HEADS = frozenset(
+    "stop halt cancel abort freeze nevermind mind forget stay hold wait enough quit pause brake "
+    "don't dont".split()
+)
 # how a question opens ("where is the fridge", "is there a printer", "do you see a lamp")
 QUESTION_OPENERS = (
     'where', "where's", 'wheres', 'what', "what's", 'which', 'how', 'is there', 'are there',
@@ -57,7 +61,8 @@ NEGATIONS = (
 CORRECTIONS = (
     'no wait', 'wait no', 'no sorry', 'sorry', 'i mean', 'i meant', 'actually', 'rather',
     'make that', 'scratch that', 'correction', 'oops', 'or rather', 'no no', 'no', 'instead',
-    'my mistake', 'my bad',
+    'my mistake', 'my bad', 'oh wait', 'hmm no', 'i meant to say', 'let me rephrase',
+    'change of plan', 'on second thought', 'i take that back', 'no no no',
 )
 # what separates the steps of a several-step request ("the fridge, then the sofa")
 SEQUENCE_MARKS = (
@@ -72,9 +77,15 @@ UNSUPPORTED = (
     'go away', 'explore', 'dance', 'look at me', 'this way', 'that way', 'go left',
     'go right', 'move left', 'move right', 'go up', 'go down', 'move back', 'move up',
     'move down', 'keep going', 'go ahead', 'get closer', 'come closer', 'back off',
+    'come with me', 'go home', 'return to base', 'go to sleep', 'power off', 'shut down',
+    'look around', 'wait for me', 'move forward', 'go straight ahead', 'bring me', 'pick up',
 )
 # a motion asked for, whatever it names ("follow the wall", "turn towards the door")
-MOTIONS = ('follow', 'turn', 'spin', 'rotate', 'dance', 'explore', 'wander', 'patrol')
+MOTIONS = (
+    'follow', 'turn', 'spin', 'rotate', 'dance', 'explore', 'wander', 'patrol', 'pick', 'grab',
+    'fetch', 'clean', 'open', 'close', 'push', 'pull', 'lift', 'carry', 'sing', 'play', 'charge',
+    'dock', 'look at',
+)
 # words that point at a place or thing said before or shown, never named ("go there")
 DEICTIC = frozenset('there here it that this them me us you'.split())
 # "across the street", "down the hall": a path or a place passed, not the place to go
