@@ -27,11 +27,11 @@ import torch
 
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.footprints import reduce_footprints
+from .core.text import tokenize
+from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .language.checks import map_reason, named_sides, said
 from .language.lexicon import Lexicon, Mention, Translation
 from .language.reading import Command, Reader, Reference
-from .core.text import tokenize
-from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
 

@@ -13,10 +13,10 @@ import pytest
 
 from spatial_grounding_ros.core.entities import EntityTable, PUDDLEWORLD
 from spatial_grounding_ros.core.footprints import anchor, footprints, reduce_footprints
-from spatial_grounding_ros.language.units import in_cells, offsets
 from spatial_grounding_ros.data.footprints import separate, unexplored
 from spatial_grounding_ros.data.generator import FAMILIES
 from spatial_grounding_ros.grounder import Grounder
+from spatial_grounding_ros.language.units import in_cells, offsets
 from spatial_grounding_ros.studies.suite import suite_worlds
 
 OFFICE = EntityTable.from_yaml(Path(__file__).parents[1] / 'config' / 'entities_office.yaml')

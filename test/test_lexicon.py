@@ -14,6 +14,7 @@ from spatial_grounding_ros.core.entities import (
     PUDDLEWORLD_NONUNIQUE,
     PUDDLEWORLD_UNIQUE,
 )
+from spatial_grounding_ros.grounder import Grounder
 from spatial_grounding_ros.language.lexicon import (
     COMMON_WORDS,
     Lexicon,
@@ -21,7 +22,6 @@ from spatial_grounding_ros.language.lexicon import (
     Translation,
     within_one_edit,
 )
-from spatial_grounding_ros.grounder import Grounder
 import yaml
 
 KITCHEN = {

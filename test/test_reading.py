@@ -32,7 +32,7 @@ def puddleworld():
 
 
 def office_map(grounder) -> np.ndarray:
-    """A 12x12 office: walls on the top row and left column; one of each landmark but chairs."""
+    """Return a 12x12 office: walls on the top row and left column, two chairs."""
     names = grounder.entities.names
     grid = np.zeros((12, 12), dtype=np.int64)
     grid[0, :] = grid[:, 0] = names.index('wall')
@@ -93,7 +93,8 @@ def test_a_question_answers_in_words_and_cell(office):
 
 
 def test_a_sequence_grounds_each_step_in_order(office):
-    result = office.ground(office_map(office), 'go two cells below the sofa, then one above the desk')
+    text = 'go two cells below the sofa, then one above the desk'
+    result = office.ground(office_map(office), text)
     assert result.intent == 'sequence'
     assert [s.goal for s in result.steps] == [(10, 6), (4, 9)]
     assert result.goal == (10, 6)  # the first step's: the node sends it first
@@ -228,7 +229,7 @@ def test_the_models_own_names_are_no_landmarks_of_another_table(office, text, wo
 
 
 def test_a_common_english_word_is_no_typo_of_a_name(office):
-    """ "hall" is one letter from "wall", and still a hall."""
+    """Read "hall" as a hall, though it is one letter from "wall"."""
     assert office.lexicon.mentions('go down the hall') == []
     assert [m.kind for m in office.lexicon.mentions('go to the fridgee')] == [
         office.entities.index('fridge')

@@ -9,6 +9,9 @@
 import numpy as np
 import pytest
 from spatial_grounding_ros.core.text import tokenize
+from spatial_grounding_ros.data.generator import generate
+from spatial_grounding_ros.data.paraphrase import paraphrase, paraphrased
+from spatial_grounding_ros.grounder import Grounder
 from spatial_grounding_ros.language.wording import (
     canonical,
     cell_for_fixed_target,
@@ -18,9 +21,6 @@ from spatial_grounding_ros.language.wording import (
     tidy,
     unpossessed,
 )
-from spatial_grounding_ros.data.generator import generate
-from spatial_grounding_ros.data.paraphrase import paraphrase, paraphrased
-from spatial_grounding_ros.grounder import Grounder
 
 
 @pytest.mark.parametrize(

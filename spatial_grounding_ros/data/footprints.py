@@ -20,11 +20,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..language.checks import mention_offsets, named_sides
 from ..core.entities import EntityTable
 from ..core.footprints import footprints
-from ..language.lexicon import COMMON_WORDS, Lexicon
 from ..core.text import tokenize
+from ..language.checks import mention_offsets, named_sides
+from ..language.lexicon import COMMON_WORDS, Lexicon
 
 GROW_SHARE = 0.7  # the share of landmarks drawn over more than one cell
 LARGEST = 3  # a footprint's longest side, in cells

@@ -26,8 +26,8 @@ import numpy as np
 
 from .datasets import GroundingSet
 from ..core import world
-from ..language.checks import EXTREME_SIDES
 from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from ..language.checks import EXTREME_SIDES
 
 GRASS, PUDDLE = 0, 1
 _NUMBER = {1: 'one', 2: 'two', 3: 'three', 4: 'four'}

@@ -20,8 +20,8 @@ from dataclasses import replace
 import numpy as np
 
 from .datasets import GroundingSet
-from ..language.checks import NUMBERS
 from ..core.text import tokenize
+from ..language.checks import NUMBERS
 from ..language.wording import COUNTS, PHRASES
 
 OPENINGS = ('', '', 'please', 'robot', 'the robot should', 'can you', 'now')

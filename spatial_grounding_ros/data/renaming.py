@@ -21,8 +21,8 @@ import numpy as np
 
 from .generator import GRASS, PUDDLE
 from ..core.entities import EntityTable, PUDDLEWORLD
-from ..language.lexicon import phrase_words
 from ..core.text import tokenize
+from ..language.lexicon import phrase_words
 
 NAMINGS = ('name', 'alias', 'typo')
 LETTERS = 'abcdefghijklmnopqrstuvwxyz'

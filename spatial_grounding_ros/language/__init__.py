@@ -4,4 +4,4 @@
 # license that can be found in the LICENSE file or at
 # https://opensource.org/licenses/MIT.
 
-"""The reading of an instruction: its words, landmarks, intent and references (docs/language.md)."""
+"""The reading of an instruction: words, landmarks, intent, references (docs/language.md)."""

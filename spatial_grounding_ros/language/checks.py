@@ -33,16 +33,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.entities import EntityTable
-from ..core.footprints import anchor, footprints, side_of
 from .lexicon import (
-    COMMON_WORDS,
     count_objects,
     EXTREME_WORDS,
     FILLER_WORDS,
     Mention,
     RELATION_WORDS,
 )
+from ..core.entities import EntityTable
+from ..core.footprints import anchor, footprints, side_of
 
 NUMBERS = {
     **{

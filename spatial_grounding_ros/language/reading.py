@@ -35,17 +35,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import functools
-import re
-
-from rapidfuzz import process
-from rapidfuzz.distance import OSA
 
 from .checks import (
     ARTICLES,
     BEFORE_A_NAME,
     CLAUSES,
     DIRECTIONS,
-    EXTREME_SIDES,
     MAP_WORDS,
     NUMBERS,
     PHRASE_ENDS,
@@ -53,7 +48,8 @@ from .checks import (
     SIDELESS,
     UNLEARNED,
 )
-from .lexicon import COMMON_WORDS, Lexicon, Mention, RELATION_WORDS
+from .lexicon import COMMON_WORDS, Lexicon, Mention
+from .phrases import find_phrase, phrase_at, sentences, spelling
 from .units import digits, in_cells, LEARNED_COUNT, offsets
 from .vocabulary import (
     CORRECTIONS,
@@ -77,7 +73,6 @@ from .wording import (
     cell_for_fixed_target,
     count_first,
     OPENING_VERBS,
-    PHRASES,
     side_of_it,
     tidy,
     UNITS,
@@ -104,17 +99,8 @@ DIRECTION_ENDS = frozenset('of from the a an to'.split())
 
 
 def is_slot(word: str) -> bool:
+    """Say whether a word is a landmark's slot."""
     return word.startswith(SLOT)
-# the words a misspelt word may be read as (one edit; two for words of seven letters or more):
-# the words that move the goal. Verbs and fillers are not among them: a misspelt verb moves
-# nothing, and "hea" is likelier a name cut short than "head"
-SPELLING_TARGETS = tuple(
-    sorted(
-        set(DIRECTIONS) | set(EXTREME_SIDES) | set(w for w in NUMBERS if w.isalpha())
-        | set(UNITS) | set(LENGTH_UNITS) | RELATION_WORDS
-        | set('closest nearest farthest furthest between next beside cell square'.split())
-    )
-)
 
 
 @dataclass(frozen=True)
@@ -166,37 +152,6 @@ class Command:
     def reference(self) -> Reference | None:
         """Return the first place named (the goal's, for go and sequence), or None."""
         return self.steps[0] if self.steps else None
-
-
-def phrase_at(words: list[str], i: int, phrases) -> str | None:
-    """Return the longest of `phrases` (strings of words) that starts at words[i], or None."""
-    best = None
-    for p in phrases:
-        pw = p.split()
-        if words[i:i + len(pw)] == pw and (best is None or len(pw) > len(best.split())):
-            best = p
-    return best
-
-
-def find_phrase(words: list[str], phrases) -> list[tuple[int, str]]:
-    """Return (index, phrase) for each place one of `phrases` starts, left to right."""
-    found, i = [], 0
-    while i < len(words):
-        p = phrase_at(words, i, phrases)
-        if p is not None:
-            found.append((i, p))
-            i += len(p.split())
-        else:
-            i += 1
-    return found
-
-
-_SENTENCE_END = re.compile(r'(?<![0-9])[.!;]+(?=\s|$)|\?+|(?<=[a-z])[.](?=\s*[A-Za-z])')
-
-
-def sentences(text: str) -> list[str]:
-    """Return the sentences of a text ("1.5 m" is no sentence end)."""
-    return [s.strip() for s in _SENTENCE_END.split(text) if s and s.strip(' ,')]
 
 
 class Reader:
@@ -500,19 +455,6 @@ class Reader:
                 if prev in BEFORE_A_NAME and (nxt is None or nxt in CLAUSES | PHRASE_ENDS):
                     return f'unknown-landmark: {w}'
         return None
-
-
-@functools.lru_cache(maxsize=4096)
-def spelling(word: str) -> str | None:
-    """Return the relation word a misspelt word is one edit from (two if long), or None."""
-    if len(word) < 3:
-        return None
-    limit = 1 if len(word) < 7 else 2
-    found = process.extract(word, SPELLING_TARGETS, scorer=OSA.distance, score_cutoff=limit,
-                            limit=2)
-    if not found or (len(found) > 1 and found[1][1] == found[0][1]):
-        return None
-    return found[0][0]
 
 
 def slot(words: list[str], mentions: list[Mention]) -> tuple[list[str], list[Mention]]:

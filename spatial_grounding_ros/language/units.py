@@ -43,9 +43,9 @@ _METRIC = re.compile(
 # cardinal number words past three ("six", "twenty one"), read by text2num into digits; one to
 # three stay words, as the network learned them
 _CARDINAL = re.compile(
-    r"\b(?:(?:zero|one|two|three|four|five|six|seven|eight|nine|ten|eleven|twelve|thirteen|"
-    r"fourteen|fifteen|sixteen|seventeen|eighteen|nineteen|twenty|thirty|forty|fifty|sixty|"
-    r"seventy|eighty|ninety|hundred|point)(?:[\s-]+|\b))+",
+    r'\b(?:(?:zero|one|two|three|four|five|six|seven|eight|nine|ten|eleven|twelve|thirteen|'
+    r'fourteen|fifteen|sixteen|seventeen|eighteen|nineteen|twenty|thirty|forty|fifty|sixty|'
+    r'seventy|eighty|ninety|hundred|point)(?:[\s-]+|\b))+',
     re.IGNORECASE,
 )
 _UNIT_WORD = r'(?:\s+(?:cells?|squares?|steps?|spaces?|tiles?|spots?))?'
@@ -76,7 +76,7 @@ def _amount(text: str) -> float:
 
 
 def digits(text: str) -> str:
-    """Return the text with each cardinal number past three in digits ("six feet": "6 feet")."""
+    """Return the text with each cardinal number past three in digits: "6 feet" for "six feet"."""
 
     def number(match: re.Match) -> str:
         said = match.group(0)

@@ -27,7 +27,7 @@ STOP_WORDS = frozenset(
 )
 # ... at least one of these must be there for a stop
 STOP_HEADS = frozenset(
-    "stop halt cancel abort freeze nevermind mind forget stay hold wait enough quit pause brake "
+    'stop halt cancel abort freeze nevermind mind forget stay hold wait enough quit pause brake '
     "don't dont".split()
 )
 # how a question opens ("where is the fridge", "is there a printer", "do you see a lamp")

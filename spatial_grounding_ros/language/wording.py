@@ -26,8 +26,8 @@ from typing import Iterable
 
 from .checks import DIRECTIONS, NUMBERS, offset_before
 from .lexicon import Mention
-from ..core.text import tokenize
 from .units import METRIC_UNIT
+from ..core.text import tokenize
 
 # canonical words -> the other wordings of them (each a phrase of one or more words)
 PHRASES = {
@@ -322,8 +322,9 @@ def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
 
 def cell_before_count(words: list[str]) -> list[str]:
     """
-    Return a reference that opens with its count ("two below the triangle") as the model
-    learned it: "reach cell two below the triangle".
+    Return a reference that opens with its count said as the model learned it.
+
+    "two below the triangle" is "reach cell two below the triangle".
 
     Said without an opening, the default read the count one too long on natural maps (three
     below, on 4 of 5 such misses in our natural set). An opening verb is left as it is: the

@@ -45,8 +45,8 @@ from .package_files import find_config
 from .qos import LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
-from ..language.lexicon import Lexicon, phrase_words, singular
 from ..core.map_geometry import origin_quaternion, rotate
+from ..language.lexicon import Lexicon, phrase_words, singular
 
 NODE_NAME = 'entity_mapper'
 # input topics of this node only (relative, like every topic of the package)

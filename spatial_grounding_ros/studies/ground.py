@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..language.checks import said
 from ..grounder import Grounder, Grounding
+from ..language.checks import said
 from ..training.options import ranged
 
 

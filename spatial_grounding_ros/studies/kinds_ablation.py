@@ -20,9 +20,9 @@ from pathlib import Path
 
 from .honesty import human
 from .suite import run_suite
-from ..language.lexicon import KINDS_BY
 from ..data.datasets import DEFAULT_DATA
 from ..grounder import DEFAULT_CHECKPOINT, Grounder
+from ..language.lexicon import KINDS_BY
 from ..models.checkpoints import load_checkpoint
 from ..training.options import ranged
 

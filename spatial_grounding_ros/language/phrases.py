@@ -1,0 +1,80 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+Finding phrases, sentences and misspelt words in an instruction's words (reading.py's tools).
+
+Phrases are strings of lower-case words as `core.text.tokenize` gives them; `spelling` reads
+a word one edit (two for long words) from a word that moves a goal as that word (rapidfuzz).
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+
+from rapidfuzz import process
+from rapidfuzz.distance import OSA
+
+from .checks import DIRECTIONS, EXTREME_SIDES, NUMBERS
+from .lexicon import RELATION_WORDS
+from .vocabulary import LENGTH_UNITS
+from .wording import UNITS
+
+# the words a misspelt word may be read as (one edit; two for words of seven letters or more):
+# the words that move the goal. Verbs and fillers are not among them: a misspelt verb moves
+# nothing, and "hea" is likelier a name cut short than "head"
+SPELLING_TARGETS = tuple(
+    sorted(
+        set(DIRECTIONS) | set(EXTREME_SIDES) | {w for w in NUMBERS if w.isalpha()}
+        | set(UNITS) | set(LENGTH_UNITS) | RELATION_WORDS
+        | set('closest nearest farthest furthest between next beside cell square'.split())
+    )
+)
+
+
+def phrase_at(words: list[str], i: int, phrases) -> str | None:
+    """Return the longest of `phrases` (strings of words) that starts at words[i], or None."""
+    best = None
+    for p in phrases:
+        pw = p.split()
+        if words[i:i + len(pw)] == pw and (best is None or len(pw) > len(best.split())):
+            best = p
+    return best
+
+
+def find_phrase(words: list[str], phrases) -> list[tuple[int, str]]:
+    """Return (index, phrase) for each place one of `phrases` starts, left to right."""
+    found, i = [], 0
+    while i < len(words):
+        p = phrase_at(words, i, phrases)
+        if p is not None:
+            found.append((i, p))
+            i += len(p.split())
+        else:
+            i += 1
+    return found
+
+
+_SENTENCE_END = re.compile(r'(?<![0-9])[.!;]+(?=\s|$)|\?+|(?<=[a-z])[.](?=\s*[A-Za-z])')
+
+
+def sentences(text: str) -> list[str]:
+    """Return the sentences of a text ("1.5 m" is no sentence end)."""
+    return [s.strip() for s in _SENTENCE_END.split(text) if s and s.strip(' ,')]
+
+
+@functools.lru_cache(maxsize=4096)
+def spelling(word: str) -> str | None:
+    """Return the relation word a misspelt word is one edit from (two if long), or None."""
+    if len(word) < 3:
+        return None
+    limit = 1 if len(word) < 7 else 2
+    found = process.extract(word, SPELLING_TARGETS, scorer=OSA.distance, score_cutoff=limit,
+                            limit=2)
+    if not found or (len(found) > 1 and found[1][1] == found[0][1]):
+        return None
+    return found[0][0]
