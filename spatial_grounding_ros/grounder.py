@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from .core.approach import approach_for
 from .core.checks import named_sides, structural_reason
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.footprints import reduce_footprints
@@ -66,6 +67,7 @@ REASONS = (
     'ambiguous',
     'unsupported',
     'goal-on-obstacle',
+    'unreachable',
     'low-confidence',
 )
 
@@ -93,7 +95,8 @@ class Grounding:
     reason: str | None = None
     alternatives: list[tuple[tuple[int, int], float]] = field(default_factory=list)
     landmarks: list[str] = field(default_factory=list)  # the table's names the words named
-    # the cell of a named landmark nearest the best cell (a goal can face it), or None
+    # the cell of a named landmark nearest the best cell (a goal can face it), or None; for a
+    # goal beside a solid landmark (core/approach.py), the landmark's cell nearest the goal
     referent: tuple[int, int] | None = None
     model_instruction: str = ''  # what the model read: the landmarks in its own names
 
@@ -281,13 +284,19 @@ class Grounder:
 
     @torch.no_grad()
     def ground(
-        self, grid: np.ndarray, instruction: str, cell_size: float | None = None
+        self,
+        grid: np.ndarray,
+        instruction: str,
+        cell_size: float | None = None,
+        robot_cell: tuple[int, int] | None = None,
     ) -> Grounding:
         """
         Ground an instruction on a grid of this grounder's table.
 
         `cell_size` (metres per cell; default: the grounder's) turns distances in metres
-        into cells; a distance in metres without one raises ValueError.
+        into cells; a distance in metres without one raises ValueError. `robot_cell`: the
+        robot's (row, col), if known: a goal beside a solid landmark is then the one it
+        reaches first (core/approach.py).
         """
         self.check(grid, instruction)
         grid = np.asarray(grid, dtype=np.int64)
@@ -309,7 +318,13 @@ class Grounder:
         values = shifted(averaged(values.numpy(), images), distances.extra)
         best, confidence, alternatives = self.judge(values)
         reason = structural_reason(self.entities, grid, *reworded(words, mentions), self.known)
-        if reason is None and int(grid[best]) in self.entities.obstacles:
+        # the approach step: sent to a solid landmark, the robot stops beside it
+        goal, referent = best, nearest_cell(grid, [m.kind for m in mentions], best)
+        approach = approach_for(self.entities, grid, *reworded(words, mentions), best, robot_cell)
+        if approach is not None:
+            goal, referent, reason = approach.goal, approach.referent, reason or approach.reason
+            alternatives = [(cell, self.probability(values, cell)) for cell in approach.others]
+        if reason is None and int(grid[goal]) in self.entities.never_goal:
             reason = 'goal-on-obstacle'
         if reason is None and confidence < self.min_confidence:
             reason = f'low-confidence: {confidence:.2f} < {self.min_confidence:.2f}'
@@ -319,7 +334,7 @@ class Grounder:
             instruction,
             values,
             aux['relation_map'][0].numpy(),
-            None if reason else best,
+            None if reason else goal,
             words,
             None if attention is None else attention[0].tolist(),
             [w for i, w in enumerate(words) if w not in self.known and i not in named],
@@ -328,7 +343,7 @@ class Grounder:
             reason=reason,
             alternatives=alternatives,
             landmarks=self.named(mentions),
-            referent=nearest_cell(grid, [m.kind for m in mentions], best),
+            referent=referent,
             model_instruction=model_text,
         )
 
@@ -376,6 +391,11 @@ class Grounder:
             return tuple(int(x) for x in np.unravel_index(i, values.shape))
 
         return cell(best), float(p[best]), [(cell(i), float(p[i])) for i in others]
+
+    def probability(self, values: np.ndarray, cell: tuple[int, int]) -> float:
+        """Return a cell's calibrated probability, as judge() gives the best cell's."""
+        flat = values.astype(np.float64) / self.temperature
+        return float(np.exp(flat[cell] - flat.max()) / np.exp(flat - flat.max()).sum())
 
     def named(self, mentions: list[Mention]) -> list[str]:
         """Return the table's names of the landmarks mentioned, each once, in order."""

@@ -197,7 +197,7 @@ def on_obstacle(
         return False
     r, c = cells[0][0] + dr, cells[0][1] + dc
     inside = 0 <= r < grid.shape[0] and 0 <= c < grid.shape[1]
-    return inside and int(grid[r, c]) in table.obstacles
+    return inside and int(grid[r, c]) in table.never_goal
 
 
 def _neighbour_words(words: list[str], m: Mention) -> tuple[list[str], list[str]]:
@@ -345,7 +345,7 @@ def structural_reason(
     unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
     if mentions and unlearned:
         return f'unsupported: "{unlearned}" is no relation the model learned'
-    if nearness_alone(words, mentions):
+    if nearness_alone(words, mentions) and mentions[0].kind not in table.solid:
         return f'ambiguous: no side of the {said(table, mentions[0].kind)} is named'
     # the rest reads the words around a name: an unknown word there says nothing
     words, mentions = without_unknown(words, known, mentions)

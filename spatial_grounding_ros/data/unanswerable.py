@@ -14,15 +14,23 @@ broken one way, with the reason a grounder should give (core/checks.py names the
 - `unknown`: it names a landmark of no kind in the table (`unknown-landmark`);
 - `off-map`: the cell it names lies past the map's edge (`off-map`);
 - `ambiguous`: its one landmark is on the map several times (`ambiguous`);
-- `obstacle`: the cell it names is a puddle (`goal-on-obstacle`).
+- `obstacle`: the cell it names is a wall (`goal-on-obstacle`), on WALLED: PuddleWorld's table
+  and a wall. A puddle is costly, not impassable: PuddleWorld's human data has goals in
+  puddles, and a goal may lie in one (EntityTable.traversal).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .generator import FAMILY_OFFSETS, GRASS, local_phrase, PUDDLE, random_grid, sample
-from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from .generator import FAMILY_OFFSETS, GRASS, local_phrase, random_grid, sample
+from ..core.entities import (
+    EntityTable,
+    PUDDLEWORLD,
+    PUDDLEWORLD_NAMES,
+    PUDDLEWORLD_NONUNIQUE,
+    PUDDLEWORLD_UNIQUE,
+)
 from ..core.lexicon import count_objects
 
 # the reason each kind of case should be declined with
@@ -34,6 +42,17 @@ REASONS = {
     'obstacle': 'goal-on-obstacle',
 }
 KINDS = tuple(REASONS)
+# PuddleWorld's table and a wall, impassable: the model reads the wall as its obstacle (the
+# puddle), so it grounds these maps as PuddleWorld's
+WALL = len(PUDDLEWORLD_NAMES)
+WALLED = EntityTable.from_dict({
+    'domain': 'puddleworld-walled',
+    'names': [*PUDDLEWORLD_NAMES, 'wall'],
+    'traversal': {'grass': 'free', 'puddle': 'costly', 'wall': 'impassable'},
+    'footprints': False,
+})
+# the table of each kind of case that is not PuddleWorld's
+TABLES = {'obstacle': WALLED}
 # landmarks no PuddleWorld table holds, as a robot's user might name them
 UNKNOWN_NAMES = (
     'fridge', 'sofa', 'lamp', 'door', 'chair', 'desk', 'window', 'sink', 'printer',
@@ -111,9 +130,9 @@ def ambiguous(rng: np.random.Generator, size: int):
 
 
 def obstacle(rng: np.random.Generator, size: int):
-    """Return an offset instruction whose named cell is a puddle."""
+    """Return an offset instruction whose named cell is a wall (WALLED's)."""
     grid, text, _, goal = _offset_case(rng, size)
-    grid[goal] = PUDDLE
+    grid[goal] = WALL
     return grid, text
 
 
@@ -124,6 +143,11 @@ MAKERS = {
     'ambiguous': ambiguous,
     'obstacle': obstacle,
 }
+
+
+def table_of(kind: str) -> EntityTable:
+    """Return the entity table a kind of case's maps are of."""
+    return TABLES.get(kind, PUDDLEWORLD)
 
 
 def cases(kind: str, size: int, n: int, seed: int = 0) -> list[tuple[np.ndarray, str]]:
