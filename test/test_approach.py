@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from spatial_grounding_ros.core.approach import (
     approach,
+    footprint_of,
     region_sizes,
     side_cells,
     steps_from,
@@ -163,6 +164,14 @@ def test_an_l_shaped_footprints_notch_counts_once():
     cells = side_cells(np.argwhere(grid == K['desk']), masks(grid)[0])
     everything = [c for side in cells.values() for c in side]
     assert len(everything) == len(set(everything)) and (2, 2) in cells['south']
+
+
+def test_a_footprint_is_the_landmark_the_cell_is_on_or_the_nearest():
+    grid = np.zeros((5, 5), dtype=np.int64)
+    grid[0, 0:2] = grid[3, 3] = grid[4, 4] = 9
+    assert footprint_of(grid, 9, (0, 1)).tolist() == [[0, 0], [0, 1]]
+    assert footprint_of(grid, 9, (2, 2)).tolist() == [[3, 3], [4, 4]]  # touching: one
+    assert footprint_of(grid, 9, (2, 2), drawn_over_cells=False).tolist() == [[3, 3]]
 
 
 def test_steps_go_around_walls_and_stop_at_the_targets():

@@ -61,9 +61,16 @@ class Approach:
     reason: str | None = None
 
 
-def footprint_of(grid: np.ndarray, kind: int, cell: Cell) -> np.ndarray:
-    """Return the footprint of `kind` that holds `cell`, or else its footprint nearest it."""
-    groups = footprints(grid, kind)
+def footprint_of(grid: np.ndarray, kind: int, cell: Cell, drawn_over_cells: bool = True):
+    """
+    Return the footprint of `kind` that holds `cell`, or else its footprint nearest it.
+
+    `drawn_over_cells` (EntityTable.has_footprints): if not, each cell is one landmark.
+    """
+    if drawn_over_cells:
+        groups = footprints(grid, kind)
+    else:
+        groups = [np.array([c]) for c in np.argwhere(grid == kind)]
     return min(groups, key=lambda cells: float(((cells - np.asarray(cell)) ** 2).sum(1).min()))
 
 
@@ -227,7 +234,7 @@ def approach_for(
     kind = approached_kind(table, grid, words, mentions, best)
     if kind is None:
         return None
-    footprint = footprint_of(grid, kind, best)
+    footprint = footprint_of(grid, kind, best, table.has_footprints)
     stand = np.isin(grid, sorted(table.kinds_that_are('free', 'passable')))
     through = ~np.isin(grid, sorted(table.blocks_robot))
     goal, referent, others = approach(footprint, stand, through, best, robot_cell)
