@@ -317,6 +317,13 @@ def test_a_landmark_no_robot_can_reach_declines(office):
     assert office.ground(grid, 'go to the fridge', robot_cell=(3, 5)).goal == (3, 5)
 
 
+def test_next_to_a_solid_landmark_the_map_lacks_is_referent_missing(office):
+    grid = office_map()
+    grid[grid == K['fridge']] = K['floor']
+    g = office.ground(grid, 'go next to the fridge', robot_cell=(9, 9))
+    assert (g.goal, g.reason) == (None, 'referent-missing: fridge')
+
+
 def test_a_robot_cell_off_the_map_is_refused(office):
     with pytest.raises(ValueError, match='off the 10x10 map'):
         office.ground(office_map(), 'go to the fridge', robot_cell=(10, 0))

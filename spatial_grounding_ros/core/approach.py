@@ -232,7 +232,7 @@ def approach_for(
     if robot_cell is not None:
         robot_cell = checked_cell(grid, robot_cell)
     kind = approached_kind(table, grid, words, mentions, best)
-    if kind is None:
+    if kind is None or not (grid == kind).any():  # a landmark not there: referent-missing
         return None
     footprint = footprint_of(grid, kind, best, table.has_footprints)
     stand = np.isin(grid, sorted(table.kinds_that_are('free', 'passable')))
