@@ -29,6 +29,7 @@ from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQU
 from .core.footprints import reduce_footprints
 from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
+from .language.approach import approach_for
 from .language.checks import map_reason, named_sides, said
 from .language.lexicon import Lexicon, Mention, Translation
 from .language.reading import Command, Reader, Reference
@@ -59,6 +60,7 @@ REASONS = (
     'ambiguous',
     'unsupported',
     'goal-on-obstacle',
+    'unreachable',
     'low-confidence',
     'unreadable',
     'negation',
@@ -88,7 +90,8 @@ class Grounding:
     reason: str | None = None
     alternatives: list[tuple[tuple[int, int], float]] = field(default_factory=list)
     landmarks: list[str] = field(default_factory=list)  # the table's names the words named
-    # the cell of a named landmark nearest the best cell (a goal can face it), or None
+    # the cell of a named landmark nearest the best cell (a goal can face it), or None; for a
+    # goal beside a solid landmark (language/approach.py), the landmark's cell nearest the goal
     referent: tuple[int, int] | None = None
     model_instruction: str = ''  # what the model read: the landmarks in its own names
     # what the instruction asks for (language.reading.INTENTS): 'go' one goal; 'sequence'
@@ -289,7 +292,11 @@ class Grounder:
 
     @torch.no_grad()
     def ground(
-        self, grid: np.ndarray, instruction: str, cell_size: float | None = None
+        self,
+        grid: np.ndarray,
+        instruction: str,
+        cell_size: float | None = None,
+        robot_cell: tuple[int, int] | None = None,
     ) -> Grounding:
         """
         Ground an instruction on a grid of this grounder's table.
@@ -298,18 +305,24 @@ class Grounder:
         then by its intent ground each place it names (`ground_reference`), answer a
         question, or say why no goal is sent. `cell_size` (metres per cell; default: the
         grounder's) turns lengths into cells; a length without one raises ValueError.
+        `robot_cell`: the robot's (row, col), if known: a goal beside a solid landmark is then
+        the one it reaches first (language/approach.py).
         """
         self.check(grid, instruction)
         command = self.read(instruction, cell_size)
         grid = np.asarray(grid, dtype=np.int64)
         if command.intent in ('go', 'sequence'):
-            steps = [self.ground_reference(grid, instruction, ref) for ref in command.steps]
+            steps = [
+                self.ground_reference(grid, instruction, ref, robot_cell) for ref in command.steps
+            ]
             return self.in_order(instruction, command, steps)
         if command.intent == 'question':
             return self.answered(grid, instruction, command)
         return self.no_goal(grid, instruction, command, command.reason)
 
-    def ground_reference(self, grid: np.ndarray, instruction: str, ref: Reference) -> Grounding:
+    def ground_reference(
+        self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
+    ) -> Grounding:
         """Return the grounding of one place: the network's value map, judged and checked."""
         model_grid, names, mentions = self.model_view(grid, ref)
         words, extra = ref.model_words(names)
@@ -320,7 +333,15 @@ class Grounder:
         values = shifted(averaged(values.numpy(), images), extra)
         best, confidence, alternatives = self.judge(values)
         reason = ref.reason or map_reason(self.entities, grid, list(ref.words), list(mentions))
-        if reason is None and int(grid[best]) in self.entities.obstacles:
+        # the approach step: sent to a solid landmark, the robot stops beside it
+        goal, referent = best, nearest_cell(grid, [m.kind for m in mentions], best)
+        approach = approach_for(
+            self.entities, grid, list(ref.words), list(mentions), best, robot_cell
+        )
+        if approach is not None:
+            goal, referent, reason = approach.goal, approach.referent, reason or approach.reason
+            alternatives = [(cell, self.probability(values, cell)) for cell in approach.others]
+        if reason is None and int(grid[goal]) in self.entities.never_goal:
             reason = 'goal-on-obstacle'
         if reason is None and confidence < self.min_confidence:
             reason = f'low-confidence: {confidence:.2f} < {self.min_confidence:.2f}'
@@ -329,7 +350,7 @@ class Grounder:
             instruction,
             values,
             aux['relation_map'][0].numpy(),
-            None if reason else best,
+            None if reason else goal,
             words,
             None if attention is None else attention[0].tolist(),
             list(ref.unknown_words),
@@ -338,7 +359,7 @@ class Grounder:
             reason=reason,
             alternatives=alternatives,
             landmarks=self.named(list(mentions)),
-            referent=nearest_cell(grid, [m.kind for m in mentions], best),
+            referent=referent,
             model_instruction=model_text,
         )
 
@@ -429,6 +450,11 @@ class Grounder:
             return tuple(int(x) for x in np.unravel_index(i, values.shape))
 
         return cell(best), float(p[best]), [(cell(i), float(p[i])) for i in others]
+
+    def probability(self, values: np.ndarray, cell: tuple[int, int]) -> float:
+        """Return a cell's calibrated probability, as judge() gives the best cell's."""
+        flat = values.astype(np.float64) / self.temperature
+        return float(np.exp(flat[cell] - flat.max()) / np.exp(flat - flat.max()).sum())
 
     def named(self, mentions: list[Mention]) -> list[str]:
         """Return the table's names of the landmarks mentioned, each once, in order."""

@@ -278,7 +278,7 @@ def test_another_entity_table_configures_with_the_default_checkpoint(ros_context
         ('please go two squares south of the couch', (7, 4)),  # an alias, a paraphrase
         ('zorp reach cell two below the sfoa blorf', (7, 4)),  # a typo, unknown words
         ('stop one metre north of the refrigerator', (5, 8)),  # metres at 0.5 m cells
-        ('reach the southernmost chair', (8, 1)),
+        ('reach the southernmost chair', (7, 1)),  # solid: the free cell beside the chair
     ],
 )
 def test_the_node_grounds_a_table_of_its_own(ros_context, instruction, cell):

@@ -42,6 +42,21 @@ def office_map(grounder) -> np.ndarray:
     return grid
 
 
+def beside(cell):
+    """Return the expectation of a goal beside a solid landmark at `cell` (approach goals)."""
+    return ('beside', cell)
+
+
+def lands(result, goal) -> bool:
+    """Say whether a grounding's goal is `goal`, or beside the landmark `beside(cell)` names."""
+    if isinstance(goal, tuple) and goal[0] == 'beside':
+        cell = goal[1]
+        return result.goal is not None and result.referent == cell and (
+            abs(result.goal[0] - cell[0]) + abs(result.goal[1] - cell[1]) == 1
+        )
+    return result.goal == goal
+
+
 @pytest.mark.parametrize(
     'text, intent',
     [
@@ -111,14 +126,14 @@ def test_a_one_reference_then_is_no_sequence(puddleworld):
 @pytest.mark.parametrize(
     'text, goal',
     [
-        ('the desk, no wait, the fridge', (3, 3)),
-        ('two cells below the fridge, sorry, I mean the sofa', (8, 6)),
+        ('the desk, no wait, the fridge', beside((3, 3))),
+        ('two cells below the fridge, sorry, I mean the sofa', beside((8, 6))),
         ('go one left of the sofa, sorry, I mean one right of it', (8, 7)),
-        ('go to the fridge, not the sofa', (3, 3)),
+        ('go to the fridge, not the sofa', beside((3, 3))),
     ],
 )
 def test_a_self_correction_means_the_last_place_said(office, text, goal):
-    assert office.ground(office_map(office), text).goal == goal
+    assert lands(office.ground(office_map(office), text), goal)
 
 
 @pytest.mark.parametrize(
@@ -139,12 +154,12 @@ def test_a_misspelt_direction_is_read_as_meant(office, text):
         ('two cells undr the sofa', (10, 6)),
         ('two cells wset of the sofa', (8, 4)),
         ('two cells to the rigth of the sofa', (8, 8)),
-        ('go to the fridgee', (3, 3)),
+        ('go to the fridgee', beside((3, 3))),
         ('two cells to the left of the sfoa', (8, 4)),
     ],
 )
 def test_misspellings_of_relations_and_names(office, text, goal):
-    assert office.ground(office_map(office), text).goal == goal
+    assert lands(office.ground(office_map(office), text), goal)
 
 
 def test_a_word_not_understood_where_it_changes_the_goal_declines(office):
@@ -195,16 +210,17 @@ def test_one_reading_for_checks_and_model(puddleworld):
 @pytest.mark.parametrize(
     'text, goal',
     [
-        ('Meet me at the sofa. It is across the street from the desk.', (8, 6)),
-        ("I'm in the kitchen area. Meet me at the fridge. It's across from the sofa.", (3, 3)),
+        ('Meet me at the sofa. It is across the street from the desk.', beside((8, 6))),
+        ("I'm in the kitchen area. Meet me at the fridge. It's across from the sofa.",
+         beside((3, 3))),
         ("There's a chair by the door; please wait one cell right of the sofa", (8, 7)),
-        ('go down the hall to the fridge', (3, 3)),
-        ('walk across the room to the sofa', (8, 6)),
+        ('go down the hall to the fridge', beside((3, 3))),
+        ('walk across the room to the sofa', beside((8, 6))),
         ('head along the corridor and go two cells below the sofa', (10, 6)),
     ],
 )
 def test_long_descriptions_and_ordinary_nouns(office, text, goal):
-    assert office.ground(office_map(office), text).goal == goal
+    assert lands(office.ground(office_map(office), text), goal)
 
 
 def test_only_the_referents_slot_can_be_unknown(office):

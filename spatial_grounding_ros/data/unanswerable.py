@@ -14,15 +14,25 @@ broken one way, with the reason a grounder should give (language/checks.py names
 - `unknown`: it names a landmark of no kind in the table (`unknown-landmark`);
 - `off-map`: the cell it names lies past the map's edge (`off-map`);
 - `ambiguous`: its one landmark is on the map several times (`ambiguous`);
-- `obstacle`: the cell it names is a puddle (`goal-on-obstacle`).
+- `obstacle`: the cell it names is a wall (`goal-on-obstacle`), on WALLED: PuddleWorld's table
+  and a wall. A puddle is costly, not impassable: PuddleWorld's human data has goals in
+  puddles, and a goal may lie in one (EntityTable.traversal);
+- `unreachable`: the landmark it names is a box (solid: approached, never entered) walled in on
+  every side, so no cell beside it can be reached (`unreachable`), on WALLED.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .generator import FAMILY_OFFSETS, GRASS, local_phrase, PUDDLE, random_grid, sample
-from ..core.entities import PUDDLEWORLD, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
+from .generator import FAMILY_OFFSETS, GRASS, local_phrase, random_grid, sample
+from ..core.entities import (
+    EntityTable,
+    PUDDLEWORLD,
+    PUDDLEWORLD_NAMES,
+    PUDDLEWORLD_NONUNIQUE,
+    PUDDLEWORLD_UNIQUE,
+)
 from ..language.lexicon import count_objects
 
 # the reason each kind of case should be declined with
@@ -32,8 +42,21 @@ REASONS = {
     'off-map': 'off-map',
     'ambiguous': 'ambiguous',
     'obstacle': 'goal-on-obstacle',
+    'unreachable': 'unreachable',
 }
 KINDS = tuple(REASONS)
+# PuddleWorld's table, a wall (impassable) and a box (solid): the model reads the wall as its
+# obstacle (the puddle) and the box, named, as one of its landmarks, so it grounds these maps
+# as PuddleWorld's
+WALL, BOX = len(PUDDLEWORLD_NAMES), len(PUDDLEWORLD_NAMES) + 1
+WALLED = EntityTable.from_dict({
+    'domain': 'puddleworld-walled',
+    'names': [*PUDDLEWORLD_NAMES, 'wall', 'box'],
+    'traversal': {'grass': 'free', 'puddle': 'costly', 'wall': 'impassable', 'box': 'solid'},
+    'footprints': False,
+})
+# the table of each kind of case that is not PuddleWorld's
+TABLES = {'obstacle': WALLED, 'unreachable': WALLED}
 # landmarks no PuddleWorld table holds, as a robot's user might name them
 UNKNOWN_NAMES = (
     'fridge', 'sofa', 'lamp', 'door', 'chair', 'desk', 'window', 'sink', 'printer',
@@ -111,10 +134,19 @@ def ambiguous(rng: np.random.Generator, size: int):
 
 
 def obstacle(rng: np.random.Generator, size: int):
-    """Return an offset instruction whose named cell is a puddle."""
+    """Return an offset instruction whose named cell is a wall (WALLED's)."""
     grid, text, _, goal = _offset_case(rng, size)
-    grid[goal] = PUDDLE
+    grid[goal] = WALL
     return grid, text
+
+
+def unreachable(rng: np.random.Generator, size: int):
+    """Return a world whose one box, named, has walls on all eight cells around it."""
+    grid = random_grid(rng, size)
+    r, c = (int(x) for x in rng.integers(1, size - 1, 2))
+    grid[r - 1:r + 2, c - 1:c + 2] = WALL
+    grid[r, c] = BOX
+    return grid, ('reach cell with box', 'go to the box', 'reach the box')[rng.integers(3)]
 
 
 MAKERS = {
@@ -123,7 +155,13 @@ MAKERS = {
     'off-map': off_map,
     'ambiguous': ambiguous,
     'obstacle': obstacle,
+    'unreachable': unreachable,
 }
+
+
+def table_of(kind: str) -> EntityTable:
+    """Return the entity table a kind of case's maps are of."""
+    return TABLES.get(kind, PUDDLEWORLD)
 
 
 def cases(kind: str, size: int, n: int, seed: int = 0) -> list[tuple[np.ndarray, str]]:

@@ -194,7 +194,7 @@ def on_obstacle(
         return False
     r, c = cells[0][0] + dr, cells[0][1] + dc
     inside = 0 <= r < grid.shape[0] and 0 <= c < grid.shape[1]
-    return inside and int(grid[r, c]) in table.obstacles
+    return inside and int(grid[r, c]) in table.never_goal
 
 
 def _neighbour_words(words: list[str], m: Mention) -> tuple[list[str], list[str]]:
@@ -292,7 +292,7 @@ def map_reason(
             continue
         if not (grid == m.kind).any():
             return f'referent-missing: {said(table, m.kind)}'
-    if nearness_alone(words, mentions):
+    if nearness_alone(words, mentions) and mentions[0].kind not in table.solid:
         return f'ambiguous: no side of the {said(table, mentions[0].kind)} is named'
     if off_map(grid, words, mentions):
         return 'off-map'

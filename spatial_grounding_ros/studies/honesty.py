@@ -34,7 +34,7 @@ from .suite import suite_worlds
 from ..core import world
 from ..data.datasets import DEFAULT_DATA, load_task
 from ..data.generator import FAMILIES
-from ..data.unanswerable import cases, KINDS, REASONS
+from ..data.unanswerable import cases, KINDS, REASONS, table_of
 from ..grounder import DEFAULT_MIN_CONFIDENCE, Grounder
 from ..training.options import ranged
 
@@ -45,7 +45,9 @@ def unanswerable(grounder: Grounder, sizes, n: int, seed: int, progress: bool) -
     out = {}
     jobs = [(kind, size) for size in sizes for kind in KINDS]
     for kind, size in tqdm(jobs, desc='unanswerable', disable=not progress):
-        found = [reason(grounder.ground(g, t)) for g, t in cases(kind, size, n, seed)]
+        table = table_of(kind)
+        of_table = grounder if table == grounder.entities else Grounder(grounder.loaded, table)
+        found = [reason(of_table.ground(g, t)) for g, t in cases(kind, size, n, seed)]
         out.setdefault(kind, {})[str(size)] = {
             'declined': float(np.mean([r is not None for r in found])),
             'right_reason': float(np.mean([r == REASONS[kind] for r in found])),
