@@ -48,7 +48,7 @@ MIRROR_AVERAGE_CELLS = 128 * 128
 
 # the least calibrated confidence a goal is sent with (docs/honest-answers.md has the
 # trade-off): under it a grounding declines, low-confidence
-DEFAULT_MIN_CONFIDENCE = 0.0
+DEFAULT_MIN_CONFIDENCE = 0.1
 
 # how many next-best cells a grounding reports
 ALTERNATIVES = 3

@@ -57,9 +57,11 @@ PARAMETERS = (
     ),
     Param(
         'min_confidence',
-        0.0,
+        0.1,
         'decline (no goal; a WARN diagnostic, reason low-confidence) when the calibrated '
-        'probability of the best cell is below this; 0 never declines for confidence',
+        'probability of the best cell is below this (0.1, the API default: no near-zero goal '
+        'is sent, the suite and the human splits stay answered; docs/honest-answers.md); 0 '
+        'never declines for confidence',
         low=0.0,
         high=1.0,
     ),

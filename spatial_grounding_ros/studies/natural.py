@@ -33,6 +33,7 @@ import numpy as np
 from tqdm import tqdm
 import yaml
 
+from .calibration import expected_calibration_error
 from ..grounder import Grounder
 
 CASES_DIR = Path(__file__).resolve().parents[1] / 'data' / 'natural'
@@ -207,8 +208,17 @@ def run_natural(cases: str | Path = 'dev', checkpoint: str = 'pw_t-rnet-attn',
         'overall': totals(rows),
         'by_table': {t: totals([r for r in rows if r['table'] == t]) for t in sorted(grounders)},
         'by_category': {c: totals([r for r in rows if r['category'] == c]) for c in order},
+        'ece': calibration(rows),
         'per_case': rows if detail else None,
     }
+
+
+def calibration(rows: list[dict]) -> float | None:
+    """Return the expected calibration error of the goals sent for cases that name a cell."""
+    sent = [r for r in rows if r['names_cell'] and r['goal'] is not None]
+    if not sent:
+        return None
+    return expected_calibration_error([r['confidence'] for r in sent], [r['right'] for r in sent])
 
 
 def pct(x: float | None) -> str:
@@ -237,6 +247,9 @@ def markdown(result: dict) -> str:
             f'{pct(r.get("intent_ok"))} | {pct(r.get("referent_ok"))} | '
             f'{pct(r.get("steps_ok"))} | {r["exceptions"]} |'
         )
+    if result.get('ece') is not None:
+        lines += ['', 'Expected calibration error of the goals sent for the cases that name a '
+                  f'cell (10 bins): {result["ece"]:.3f}.']
     return '\n'.join(lines) + '\n'
 
 
