@@ -18,13 +18,15 @@ from pathlib import Path
 import pytest
 import yaml
 
+from spatial_grounding_ros.core.entities import EntityTable
+
 REPO = Path(__file__).resolve().parents[1]
 CASES = REPO / 'spatial_grounding_ros' / 'data' / 'natural'
 SETS = {'dev': (240, 12), 'held_out': (160, 8)}  # at least this many cases and maps
 CATEGORIES = {
     'offset', 'filler', 'typo', 'unit', 'near', 'extreme', 'nearest', 'negation', 'question',
     'stop', 'sequence', 'correction', 'unsupported', 'unknown', 'missing', 'ambiguous', 'offmap',
-    'obstacle', 'long', 'noun',
+    'obstacle', 'costly', 'long', 'noun',
 }
 SIZES = {'office': (10, 32), 'puddleworld': (10, 15)}
 NO_GOAL = {'negation', 'question', 'stop', 'unsupported', 'unknown', 'missing', 'ambiguous',
@@ -87,7 +89,10 @@ def test_cases_are_well_formed(name):
         m = data['maps'][case['map']]
         grid = rows(m)
         entities = table(m['table'])
-        obstacles = {entities['names'][i] for i in entities['obstacles']}
+        # no expected cell is impassable (a puddle, costly, may hold a goal; a near list names
+        # a solid landmark's own cells beside the free ones)
+        kinds = EntityTable.from_yaml(REPO / 'config' / f'entities_{m["table"]}.yaml')
+        obstacles = {kinds.names[i] for i in kinds.kinds_that_are('impassable')}
         expect = case['expect']
         kinds = [k for k in ('goal', 'near', 'decline', 'intent') if k in expect]
         assert len(kinds) == 1, where

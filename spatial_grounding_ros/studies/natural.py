@@ -47,7 +47,7 @@ TABLE_DIRS = (
 CATEGORIES = (
     'offset', 'filler', 'typo', 'unit', 'near', 'extreme', 'nearest', 'negation', 'question',
     'stop', 'sequence', 'correction', 'unsupported', 'unknown', 'missing', 'ambiguous', 'offmap',
-    'obstacle', 'long', 'noun',
+    'obstacle', 'costly', 'long', 'noun',
 )
 
 
