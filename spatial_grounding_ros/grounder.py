@@ -96,6 +96,11 @@ class Grounding:
     # the cell of a named landmark nearest the best cell (a goal can face it), or None
     referent: tuple[int, int] | None = None
     model_instruction: str = ''  # what the model read: the landmarks in its own names
+    # what the instruction asks: 'go', 'stop', 'question', 'sequence', 'negation', 'unsupported'
+    intent: str = 'go'
+    # 'sequence': one grounding per step, in order (`goal` is the first step's goal)
+    steps: list[Grounding] = field(default_factory=list)
+    answer: str | None = None  # 'question': the answer in words (`referent`: the landmark's cell)
 
     @property
     def reason_code(self) -> str | None:
