@@ -47,7 +47,7 @@ def text(rng):
 
 
 def random_map(rng):
-    """Return an OccupancyGrid that is often malformed: size, data length, values, resolution, origin."""
+    """Return an OccupancyGrid, often malformed: size, data length, values, resolution, origin."""
     from spatial_grounding_ros.ros import convert
     from std_msgs.msg import Header
 
