@@ -165,7 +165,9 @@ def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, na
 
 def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env, ros_context):
     exe = Path(ament_packages.get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'grounder'
-    args = ['--ros-args', '-r', f'__ns:={NAMESPACE}']
+    # PuddleWorld maps: the default table is the office one (the entity mapper's)
+    table = 'entity_table:=entities_puddleworld.yaml'
+    args = ['--ros-args', '-r', f'__ns:={NAMESPACE}', '-p', table]
     # the packaged defaults, packaged checkpoint included: a checkpoint that cannot load fails
     # here (and the node would exit with an error), never falls back to another model
     checkpoint = resolve_checkpoint(DEFAULT_CHECKPOINT)
