@@ -70,7 +70,11 @@ def generate_launch_description():
                 executable='grounder',
                 name='spatial_grounder',
                 namespace=namespace,
-                parameters=[LaunchConfiguration('grounder_params_file'), common],
+                # the gridworld's maps are PuddleWorld's (the shipped file's table: office)
+                parameters=[
+                    LaunchConfiguration('grounder_params_file'),
+                    {**common, 'entity_table': 'entities_puddleworld.yaml'},
+                ],
                 arguments=log_level,
                 output='screen',
                 emulate_tty=True,

@@ -30,6 +30,15 @@ from spatial_grounding_ros.models.registry import build_model
 import torch
 
 MODEL = 't-rnet-attn'
+# the grounder's default table is the office one (the entity mapper's); PuddleWorld maps need
+# this (issue 42)
+PUDDLEWORLD_YAML = 'entities_puddleworld.yaml'
+try:
+    from rclpy.parameter import Parameter
+
+    PUDDLEWORLD_TABLE = Parameter('entity_table', value=PUDDLEWORLD_YAML)
+except ImportError:  # the tests that need it skip without rclpy
+    PUDDLEWORLD_TABLE = None
 
 
 def unique_namespace(base: str) -> str:

@@ -111,6 +111,9 @@ INSTALLED = (
     'config/entities_isi.yaml',
     'launch/grounder.launch.py',
     'launch/demo.launch.py',
+    'launch/robot.launch.py',
+    'config/entity_mapper.yaml',
+    'config/entities_office.yaml',
     'rviz/spatial_grounding.rviz',
     'package.xml',
     'LICENSE',
@@ -130,13 +133,15 @@ def test_installed_files_are_the_checked_ones(install_prefix, ament_env):
     share = Path(ament_packages.get_package_share_directory(PACKAGE))
     for name in INSTALLED:
         assert (share / name).read_bytes() == (REPO / name).read_bytes(), name
-    for name in ('grounder.launch.py', 'demo.launch.py'):
+    for name in ('grounder.launch.py', 'demo.launch.py', 'robot.launch.py'):
         compile((share / 'launch' / name).read_text(), name, 'exec')
     for name in ('grounder.yaml', 'gridworld.yaml'):
         assert parameter_dict_from_yaml_file(str(share / 'config' / name)), name
 
 
-@pytest.mark.parametrize('name, nodes', [('grounder.launch.py', 1), ('demo.launch.py', 3)])
+@pytest.mark.parametrize(
+    'name, nodes', [('grounder.launch.py', 1), ('demo.launch.py', 3), ('robot.launch.py', 3)]
+)
 def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, name, nodes):
     """
     What only ROS launch can show: the installed file builds a description holding its Nodes.
@@ -160,7 +165,9 @@ def test_launch_description_builds_with_ros_launch(install_prefix, ament_env, na
 
 def test_installed_grounder_joins_the_graph_and_answers(install_prefix, ament_env, ros_context):
     exe = Path(ament_packages.get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'grounder'
-    args = ['--ros-args', '-r', f'__ns:={NAMESPACE}']
+    # PuddleWorld maps: the default table is the office one (the entity mapper's)
+    table = 'entity_table:=entities_puddleworld.yaml'
+    args = ['--ros-args', '-r', f'__ns:={NAMESPACE}', '-p', table]
     # the packaged defaults, packaged checkpoint included: a checkpoint that cannot load fails
     # here (and the node would exit with an error), never falls back to another model
     checkpoint = resolve_checkpoint(DEFAULT_CHECKPOINT)

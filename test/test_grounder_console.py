@@ -21,7 +21,12 @@ import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import interrupt, make_probe, unique_namespace  # noqa: E402, I100
+from grounder_helpers import (  # noqa: E402, I100
+    interrupt,
+    make_probe,
+    PUDDLEWORLD_YAML as PW_YAML,
+    unique_namespace,
+)
 from spatial_grounding_ros.data.datasets import load_task  # noqa: E402
 from spatial_grounding_ros.grounder import DEFAULT_CHECKPOINT, Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
@@ -42,7 +47,8 @@ def test_console_grounder_answers_test_maps_like_the_python_api(data_dir, ros_co
     test = test.subset(np.array(answered[:7]))
     expected = [api.ground(g, t).goal for g, t in zip(test.grids, test.instructions)]
     process = subprocess.Popen(
-        [str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}'],
+        # PuddleWorld maps: the default table is the office one (the entity mapper's)
+        [str(exe), '--ros-args', '-r', f'__ns:={NAMESPACE}', '-p', f'entity_table:={PW_YAML}'],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,

@@ -19,7 +19,12 @@ import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
-from grounder_helpers import make_probe, north_east_checkpoint, unique_namespace  # noqa: E402,I100
+from grounder_helpers import (  # noqa: E402,I100
+    make_probe,
+    north_east_checkpoint,
+    PUDDLEWORLD_TABLE,
+    unique_namespace,
+)
 from rclpy.parameter import Parameter  # noqa: E402
 from spatial_grounding_ros.core.entities import PUDDLEWORLD_NONUNIQUE  # noqa: E402
 from spatial_grounding_ros.data import generator  # noqa: E402
@@ -33,7 +38,9 @@ def start(graph, namespace, overrides=()):
         GrounderNode(
             context=graph.context,
             namespace=namespace,
-            parameter_overrides=[Parameter('torch_threads', value=0), *overrides],
+            parameter_overrides=[
+                Parameter('torch_threads', value=0), PUDDLEWORLD_TABLE, *overrides
+            ],
         )
     )
     probe = graph.add(make_probe(graph.context, namespace, grounder.get_fully_qualified_name()))

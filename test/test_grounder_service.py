@@ -23,7 +23,7 @@ pytest.importorskip('spatial_grounding_interfaces', reason='make setup builds th
 from conftest import WAIT  # noqa: E402, I100
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
-from grounder_helpers import make_probe, unique_namespace  # noqa: E402
+from grounder_helpers import make_probe, PUDDLEWORLD_TABLE, unique_namespace  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from spatial_grounding_ros.grounder import Grounder  # noqa: E402
 from spatial_grounding_ros.ros import convert  # noqa: E402
@@ -54,7 +54,7 @@ def nodes(ros_module_context):
         GrounderNode(
             context=graph.context,
             namespace=NAMESPACE,
-            parameter_overrides=[Parameter('torch_threads', value=0)],
+            parameter_overrides=[Parameter('torch_threads', value=0), PUDDLEWORLD_TABLE],
         )
     )
     probe = graph.add(make_probe(graph.context, NAMESPACE, grounder.get_fully_qualified_name()))
@@ -175,7 +175,7 @@ def test_an_expired_instruction_never_fires_on_a_later_map(nodes):
         ), 'no expiry diagnostic'
         [expired] = [s for s in probe.new('diagnostics', before) if 'expired' in s.message]
         assert expired.level == DiagnosticStatus.WARN and ABOVE_ROCK in expired.message
-        assert not grounder.instruction_pending
+        assert not grounder.hold.pending
         hold(nodes, rock_map())
         # a map, then a new instruction: exactly one goal, the new instruction's
         probe.publish_instruction('reach the cell below the rock')

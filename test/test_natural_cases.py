@@ -16,9 +16,8 @@ no goal expects a decline or an intent), and held_out shares neither maps nor wo
 from pathlib import Path
 
 import pytest
-import yaml
-
 from spatial_grounding_ros.core.entities import EntityTable
+import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 CASES = REPO / 'spatial_grounding_ros' / 'data' / 'natural'

@@ -74,7 +74,12 @@ def test_grounder_defaults_find_their_files():
     _, parameters = node_parameters('grounder_node')
     defaults = {p.name: p.default for p in parameters}
     assert defaults['checkpoint'] == 'pw_t-rnet-attn'
-    assert EntityTable.from_yaml(find_config(defaults['entity_table'])) == PUDDLEWORLD
+    # the entity mapper's table: the two nodes work together as they start (issue 42)
+    from spatial_grounding_ros.ros.entity_mapper_node import PARAMETERS as MAPPER
+
+    mapper = {p.name: p.default for p in MAPPER}
+    assert defaults['entity_table'] == mapper['entity_table'] == 'entities_office.yaml'
+    assert EntityTable.from_yaml(find_config(defaults['entity_table'])).domain == 'office'
 
 
 def test_find_config_by_path_and_by_name(tmp_path):
@@ -237,6 +242,59 @@ def test_demo_launch_file_starts_gridworld_grounder_and_rviz_on_request():
     assert (REPO / 'rviz' / 'spatial_grounding.rviz').is_file()
 
 
+def test_robot_launch_file_starts_mapper_and_grounder_with_one_entity_table():
+    """
+    `ros2 launch spatial_grounding_ros robot.launch.py entity_table:=...` (issue 42).
+
+    The entity mapper and the grounder, each with its params file and then the one
+    entity_table, use_sim_time and autostart; the mapper's map topic remapped; RViz on request.
+    """
+    arguments, nodes = launch_parts('robot.launch.py')
+    assert set(arguments) == {
+        'namespace',
+        'entity_table',
+        'map_topic',
+        'grounder_params_file',
+        'mapper_params_file',
+        'use_sim_time',
+        'autostart',
+        'log_level',
+        'rviz',
+    }
+    assert arguments['entity_table']['default_value'] == 'entities_office.yaml'
+    assert find_config(arguments['entity_table']['default_value']).is_file()
+    check_default_params_file(arguments['grounder_params_file'], 'grounder.yaml')
+    check_default_params_file(arguments['mapper_params_file'], 'entity_mapper.yaml')
+    mapper, grounder, rviz = nodes
+    shared = {
+        'use_sim_time': lc('use_sim_time'),
+        'autostart': lc('autostart'),
+        'entity_table': lc('entity_table'),
+    }
+    assert check_our_node(mapper, 'entity_mapper', 'mapper_params_file') == shared
+    assert check_our_node(grounder, 'grounder', 'grounder_params_file') == shared
+    assert mapper['remappings'] == [['map', lc('map_topic')]]
+    assert 'condition' not in mapper and 'condition' not in grounder
+    assert (rviz['package'], rviz['executable']) == ('rviz2', 'rviz2')
+    assert rviz['condition'] == {'call': 'IfCondition', 'args': [lc('rviz')]}
+    assert rviz['namespace'] == lc('namespace')
+
+
+def test_robot_launch_file_builds_its_description_where_ros_launch_is_installed():
+    """Import the file and build its description (skips where `launch` is not installed)."""
+    import importlib.util
+
+    pytest.importorskip('launch.actions', reason='ROS launch is not installed (not on PyPI)')
+    pytest.importorskip('launch_ros.actions', reason='launch_ros is not installed (not on PyPI)')
+    path = REPO / 'launch' / 'robot.launch.py'
+    spec = importlib.util.spec_from_file_location('robot_launch', path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    description = module.generate_launch_description()
+    executables = [getattr(e, 'node_executable', None) for e in description.entities]
+    assert 'entity_mapper' in executables and 'grounder' in executables
+
+
 def test_readme_launch_lines_use_the_declared_arguments():
     """
     Check the documentation's `ros2 launch` lines against the launch files' arguments.
@@ -246,7 +304,7 @@ def test_readme_launch_lines_use_the_declared_arguments():
     """
     readme = (REPO / 'README.md').read_text()
     pages = [readme, *(p.read_text() for p in sorted((REPO / 'docs').glob('*.md')))]
-    assert {'grounder.launch.py', 'demo.launch.py'} <= set(
+    assert {'robot.launch.py', 'grounder.launch.py', 'demo.launch.py'} <= set(
         re.findall(r'ros2 launch spatial_grounding_ros (\S+\.launch\.py)', readme)
     )
     seen = set()
@@ -259,7 +317,7 @@ def test_readme_launch_lines_use_the_declared_arguments():
         declared = set(launch_parts(file)[0])
         used = set(re.findall(r'(\w+):=', rest))
         assert used <= declared, line
-    assert seen == {'grounder.launch.py', 'demo.launch.py'}
+    assert seen == {'robot.launch.py', 'grounder.launch.py', 'demo.launch.py'}
 
 
 # --- rviz/spatial_grounding.rviz

@@ -16,6 +16,8 @@ these topics without ROS; plain strings, no message module is imported.
 ENTITY_MAP = 'entity_map'
 INSTRUCTION = 'instruction'
 GOAL_POSE = 'goal_pose'
+# a sequence's goals in order (nav_msgs/Path); an empty path: stop
+GOAL_PATH = 'goal_path'
 VALUE_MAP = 'value_map'
 VALUE_MAP_RAW = 'value_map_raw'
 VALUE_MAP_IMAGE = 'value_map_image'
@@ -50,6 +52,7 @@ MSGTYPES = {
     VALUE_MAP: 'nav_msgs/msg/OccupancyGrid',
     RELATION_MAP: 'nav_msgs/msg/OccupancyGrid',
     GOAL_POSE: 'geometry_msgs/msg/PoseStamped',
+    GOAL_PATH: 'nav_msgs/msg/Path',
     AGENT_POSE: 'geometry_msgs/msg/PoseStamped',
     ROBOT_POSE: 'geometry_msgs/msg/PoseStamped',
     REWARD: 'std_msgs/msg/Float32',

@@ -109,6 +109,8 @@ def round_trip_latency(
             f'__ns:={NAMESPACE}',
             '-p',
             f'checkpoint:={checkpoint}',
+            '-p',
+            'entity_table:=entities_puddleworld.yaml',  # PuddleWorld maps (the default: office)
             *(a for p in parameters for a in ('-p', p)),
         ],
         stdout=subprocess.DEVNULL,

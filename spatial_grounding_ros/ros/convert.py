@@ -25,6 +25,7 @@ import numpy as np
 from sensor_msgs.msg import Image
 from std_msgs.msg import Float32MultiArray, Header, MultiArrayDimension
 
+from ..core import instruction_hold
 # the ROS side reads the geometry through this module: convert.cell_centre, convert.point_to_cell
 from ..core.map_geometry import cell_centre, multiarray_to_map, origin_quaternion
 from ..core.map_geometry import point_to_cell  # noqa: F401
@@ -34,7 +35,7 @@ PERCENT = 100  # OccupancyGrid cell values for RViz: 0..100
 # for a Nav2 costmap layer (docs/ros.md, "Feeding Nav2")
 VALUE_MAP_ENCODINGS = ('display', 'cost')
 # the goal's orientation: identity, toward the referent landmark, or the robot's own yaw
-GOAL_HEADINGS = ('identity', 'face_referent', 'keep')
+GOAL_HEADINGS = instruction_hold.GOAL_HEADINGS
 
 
 def check_map_info(info: MapMetaData, max_cells: int) -> None:
@@ -235,16 +236,3 @@ def yaw_quaternion(yaw: float) -> Quaternion:
 def quaternion_yaw(q: Quaternion) -> float:
     """Return the yaw (rotation about z) of an orientation, as tf2's getYaw."""
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def yaw_toward(cell: tuple[int, int], target: tuple[int, int] | None, info: MapMetaData):
-    """
-    Return the map-frame yaw from `cell`'s centre toward `target`'s centre.
-
-    None when there is no target or it is the cell itself (no direction to face).
-    """
-    if target is None or tuple(target) == tuple(cell):
-        return None
-    x0, y0, _ = cell_centre(cell, info)
-    x1, y1, _ = cell_centre(target, info)
-    return math.atan2(y1 - y0, x1 - x0)

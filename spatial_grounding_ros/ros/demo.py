@@ -202,7 +202,8 @@ def start_nodes(logs: dict, common: list[str], source: list[str], gridworld: lis
     }
     return [
         subprocess.Popen(
-            executable('grounder') + common,
+            # the gridworld's maps are PuddleWorld's (the grounder's default table: office)
+            executable('grounder') + common + ['-p', 'entity_table:=entities_puddleworld.yaml'],
             env=env,
             stdout=logs['grounder'],
             stderr=subprocess.STDOUT,

@@ -24,36 +24,51 @@ map gets a WARN diagnostic and is left out.
 from __future__ import annotations
 
 import array
-from dataclasses import dataclass
-import math
-from pathlib import Path
 import sys
 from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from nav_msgs.msg import MapMetaData, OccupancyGrid
+from nav_msgs.msg import OccupancyGrid
 import numpy as np
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
-import yaml
 
 from . import convert
-from .node_support import declare_parameters, Param, report, spin
+from .entity_cells import (  # noqa: F401 - the mapper's geometry, also read from here
+    entity_cells,
+    entity_info,
+    footprint_cells,
+    kind_of,
+    Landmark,
+    marker_landmark,
+    PLACE_TYPES,
+    read_landmarks_file,
+)
+from .node_support import (
+    autostart,
+    declare_parameters,
+    destroy_entities,
+    error_text,
+    guard_change_state,
+    guarded,
+    Param,
+    publish_status,
+    report,
+    SEE_OVERRIDES,
+    spin,
+)
 from .package_files import find_config
 from .qos import LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
-from ..core.map_geometry import origin_quaternion, rotate
-from ..language.lexicon import Lexicon, phrase_words, singular
+from ..language.lexicon import Lexicon
 
 NODE_NAME = 'entity_mapper'
 # input topics of this node only (relative, like every topic of the package)
 MAP = 'map'
 LANDMARKS = 'landmarks'
-# marker types that place a landmark; the rest (arrows, lines, meshes) are not places
-PLACE_TYPES = (Marker.CUBE, Marker.CYLINDER, Marker.TEXT_VIEW_FACING)
 # a SLAM map cell is occupied at map_server's default occupied_thresh 0.65
 OCCUPIED_THRESHOLD = 65
 
@@ -105,149 +120,112 @@ PARAMETERS = (
         read_only=True,
         choices=('volatile', 'transient_local'),
     ),
+    Param(
+        'max_cells',
+        4096 * 4096,
+        'a SLAM map, or the entity map it makes at cell_size, of more cells is refused with a '
+        'WARN (memory grows with the cells)',
+        read_only=True,
+        low=1,
+        high=2**31 - 1,
+    ),
+    Param(
+        'max_landmark_size',
+        100.0,
+        'a marker whose scale.x or scale.y is larger (metres), negative or not finite is '
+        'skipped with a WARN',
+        read_only=True,
+        low=0.0,
+        high=1e6,
+    ),
+    Param(
+        'autostart',
+        True,
+        'configure and activate at start-up (false: wait for a lifecycle manager on '
+        '<node>/change_state)',
+        read_only=True,
+    ),
 )
 
 
-@dataclass(frozen=True)
-class Landmark:
-    """A named place: its map-frame centre and footprint (0: one cell)."""
-
-    name: str
-    x: float
-    y: float
-    size_x: float = 0.0
-    size_y: float = 0.0
-    frame_id: str = ''  # empty: the map's frame
-
-
-def entity_info(info: MapMetaData, cell_size: float) -> MapMetaData:
-    """Return the entity map's meta data: the SLAM map's origin pose, `cell_size` cells over it."""
-    out = MapMetaData()
-    out.resolution = float(cell_size)
-    # a message's resolution is a float32 (0.05 is 0.0500000007): tolerate its rounding
-    out.width = max(1, math.ceil(info.width * info.resolution / cell_size - 1e-4))
-    out.height = max(1, math.ceil(info.height * info.resolution / cell_size - 1e-4))
-    out.origin = info.origin
-    return out
-
-
-def entity_cells(
-    slam: np.ndarray, resolution: float, info: MapMetaData, kinds: tuple[int, int, int], thr: int
-) -> np.ndarray:
-    """
-    Return the (height, width) kinds of the entity map, in OccupancyGrid order (row 0 at origin).
-
-    `slam` is the SLAM map in the same order. Each SLAM cell belongs to the entity cell holding
-    its centre; an entity cell with an occupied SLAM cell is `kinds` obstacle, one with more
-    unknown than known cells unknown, else free. An entity cell smaller than a SLAM cell reads
-    the SLAM cell under its own centre. `kinds` is (free, obstacle, unknown).
-    """
-    free, obstacle, unknown = kinds
-    h, w = info.height, info.width
-    ratio = resolution / info.resolution
-    rows = np.minimum(((np.arange(slam.shape[0]) + 0.5) * ratio).astype(np.int64), h - 1)
-    cols = np.minimum(((np.arange(slam.shape[1]) + 0.5) * ratio).astype(np.int64), w - 1)
-    owner = (rows[:, None] * w + cols[None, :]).ravel()
-    cells = slam.ravel()
-    total = np.bincount(owner, minlength=h * w)
-    occupied = np.bincount(owner, weights=cells >= thr, minlength=h * w) > 0
-    unknowns = np.bincount(owner, weights=cells < 0, minlength=h * w)
-    out = np.where(occupied, obstacle, np.where(2 * unknowns > total, unknown, free))
-    empty = np.flatnonzero(total == 0)
-    if empty.size:  # cells finer than the SLAM map: the SLAM cell under the centre
-        r = np.minimum(((empty // w + 0.5) / ratio).astype(np.int64), slam.shape[0] - 1)
-        c = np.minimum(((empty % w + 0.5) / ratio).astype(np.int64), slam.shape[1] - 1)
-        under = slam[r, c]
-        out[empty] = np.where(under >= thr, obstacle, np.where(under < 0, unknown, free))
-    return out.reshape(h, w)
-
-
-def footprint_cells(landmark: Landmark, info: MapMetaData) -> tuple[slice, slice] | None:
-    """
-    Return the (rows, cols) slices, OccupancyGrid order, of the cells a landmark covers.
-
-    The cells whose centres lie in its footprint (axis-aligned with the grid), or the one cell
-    under its centre when the footprint holds no cell centre; None when that is off the map.
-    """
-    p = info.origin.position
-    inverse = origin_quaternion(info.origin) * np.array([-1, -1, -1, 1])
-    lx, ly, _ = rotate(inverse, np.array([landmark.x - p.x, landmark.y - p.y, 0.0]))
-    size = info.resolution
-    spans = []
-    axes = ((ly, landmark.size_y, info.height), (lx, landmark.size_x, info.width))
-    for centre, extent, n in axes:
-        first = math.ceil((centre - extent / 2) / size - 0.5 - 1e-9)
-        last = math.floor((centre + extent / 2) / size - 0.5 + 1e-9)
-        if extent <= 0 or last < first:
-            first = last = math.floor(centre / size)
-        first, last = max(first, 0), min(last, n - 1)
-        if last < first:
-            return None
-        spans.append(slice(first, last + 1))
-    return spans[0], spans[1]
-
-
-def kind_of(lexicon: Lexicon, name: str) -> int | None:
-    """Return the kind a landmark name (a name, alias, plural or one-edit typo) names, or None."""
-    words = phrase_words(name)
-    if not words:
-        return None
-    if len(words) == 1:
-        return lexicon.word_kind(words[0])
-    return lexicon.phrase_kind(words[:-1] + (singular(words[-1]),))
-
-
-def read_landmarks_file(path: str | Path) -> list[Landmark]:
-    """
-    Read `landmarks: [{name, x, y, size}]` (size: metres, a number or [x, y]; omitted: one cell).
-
-    An optional top-level `frame_id` applies to every landmark. ValueError says what is wrong.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f'{path}: landmarks file not found')
-    data = yaml.safe_load(path.read_text()) or {}
-    items = data.get('landmarks') if isinstance(data, dict) else None
-    if not isinstance(items, list):
-        raise ValueError(f'{path}: a landmarks file holds `landmarks:`, a list of {{name, x, y}}')
-    frame = str(data.get('frame_id') or '')
-    out = []
-    for i, item in enumerate(items):
-        try:
-            size = item.get('size', 0.0)
-            sx, sy = (size, size) if isinstance(size, (int, float)) else size
-            landmark = Landmark(
-                str(item['name']), float(item['x']), float(item['y']), float(sx), float(sy), frame
-            )
-        except (AttributeError, KeyError, TypeError, ValueError) as exc:
-            raise ValueError(
-                f'{path}: landmark {i} ({item!r}) needs name, x, y and may give size '
-                f'(a number or [x, y]): {exc}'
-            ) from exc
-        if not all(map(math.isfinite, (landmark.x, landmark.y, landmark.size_x, landmark.size_y))):
-            raise ValueError(f'{path}: landmark {i} ({item!r}) has a non-finite number')
-        out.append(landmark)
-    return out
-
-
-class EntityMapperNode(Node):
-    """SLAM map + named landmarks -> entity map, republished on every change."""
+class EntityMapperNode(LifecycleNode):
+    """SLAM map + named landmarks -> entity map, republished on every change; a managed node."""
 
     def __init__(self, **node_options):
-        super().__init__(NODE_NAME, **node_options)
+        super().__init__(NODE_NAME, **{**SEE_OVERRIDES, **node_options})
         declare_parameters(self, PARAMETERS)
+        guard_change_state(self, self.state_label)
+        self.table: EntityTable | None = None
+        self.configure_error = ''
+        self.active = self.autostarting = False
+        self.topics = []
+        self.fixed: list[Landmark] = []
+        self.markers: dict[tuple[str, int], Landmark] = {}
+        self.map_msg: OccupancyGrid | None = None
+        self.slam: np.ndarray | None = None
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 100)
+        publish_status(self, self.diagnostics_pub, self.status)
+        autostart(self)
+
+    def param(self, name: str):
+        return self.get_parameter(name).value
+
+    def state_label(self) -> str:
+        return 'active' if self.active else 'inactive' if self.table else 'unconfigured'
+
+    def status(self) -> tuple[bytes, str, dict]:
+        values = {
+            'state': self.state_label(),
+            'map': 'none' if self.slam is None else '{}x{}'.format(*self.slam.shape[::-1]),
+            'landmarks': len(self.fixed) + len(self.markers),
+        }
+        if self.table is None and self.configure_error:
+            return DiagnosticStatus.WARN, f'configure failed: {self.configure_error}', values
+        return DiagnosticStatus.OK, values['state'], values
+
+    # --- lifecycle transitions
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        try:
+            self.load_table()
+        except Exception as exc:  # noqa: BLE001 - rclpy would swallow it: say what failed
+            self.table = None
+            self.configure_error = error_text(exc, (ValueError, OSError))
+            if not self.autostarting:
+                self.get_logger().error(f'configure failed: {self.configure_error}')
+            return TransitionCallbackReturn.FAILURE
+        self.configure_error = ''
+        self.entity_pub = self.create_lifecycle_publisher(
+            OccupancyGrid, topics.ENTITY_MAP, LATCHED
+        )
+        durability = (
+            DurabilityPolicy.TRANSIENT_LOCAL
+            if self.param('landmarks_durability') == 'transient_local'
+            else DurabilityPolicy.VOLATILE
+        )
+        landmarks_qos = QoSProfile(
+            depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=durability
+        )
+        self.topics = [
+            self.entity_pub,
+            self.create_subscription(OccupancyGrid, MAP, self.on_map, LATCHED),
+            self.create_subscription(MarkerArray, LANDMARKS, self.on_landmarks, landmarks_qos),
+        ]
+        return super().on_configure(state)
+
+    def load_table(self) -> None:
         table_path = find_config(self.param('entity_table'))
-        self.table = EntityTable.from_yaml(table_path)
-        if len(self.table) > 128:
+        table = EntityTable.from_yaml(table_path)
+        if len(table) > 128:
             raise ValueError(f'{table_path}: more than 128 kinds do not fit an OccupancyGrid cell')
-        self.lexicon = Lexicon(self.table)
+        self.table, self.lexicon = table, Lexicon(table)
         self.kinds = tuple(
             self.table_kind(k) for k in ('free_kind', 'obstacle_kind', 'unknown_kind')
         )
         for role, kind in zip(('obstacle_kind', 'unknown_kind'), self.kinds[1:]):
-            if kind not in self.table.obstacles:
+            if kind not in table.obstacles:
                 self.get_logger().warning(
-                    f'{role} {self.table.names[kind]!r} is not an obstacle of {table_path}: '
+                    f'{role} {table.names[kind]!r} is not an obstacle of {table_path}: '
                     'the grounder may send a goal onto it'
                 )
         self.fixed = (
@@ -255,28 +233,42 @@ class EntityMapperNode(Node):
             if self.param('landmarks_file')
             else []
         )
-        self.markers: dict[tuple[str, int], Landmark] = {}
-        self.map_msg: OccupancyGrid | None = None
-        self.slam: np.ndarray | None = None
-        self.entity_pub = self.create_publisher(OccupancyGrid, topics.ENTITY_MAP, LATCHED)
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
-        self.create_subscription(OccupancyGrid, MAP, self.on_map, LATCHED)
-        durability = (
-            DurabilityPolicy.TRANSIENT_LOCAL
-            if self.param('landmarks_durability') == 'transient_local'
-            else DurabilityPolicy.VOLATILE
-        )
-        landmarks_qos = QoSProfile(
-            depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=durability
-        )
-        self.create_subscription(MarkerArray, LANDMARKS, self.on_landmarks, landmarks_qos)
         self.get_logger().info(
             f'entity table {table_path}, {self.param("cell_size"):g} m cells, '
             f'{len(self.fixed)} landmarks from a file; waiting for {MAP}'
         )
 
-    def param(self, name: str):
-        return self.get_parameter(name).value
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.active = True
+        result = super().on_activate(state)
+        self.publish()  # the map and landmarks held while inactive
+        return result
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.active = False  # maps and landmarks are still taken and held
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.release()
+        return super().on_shutdown(state)
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.release()
+        return TransitionCallbackReturn.SUCCESS
+
+    def release(self) -> None:
+        self.active = False
+        destroy_entities(self, self.topics)
+        self.topics, self.table, self.fixed, self.markers = [], None, [], {}
+        self.map_msg = self.slam = None
+
+    def destroy_node(self) -> None:
+        self.release()
+        super().destroy_node()
 
     def table_kind(self, parameter: str) -> int:
         name = self.param(parameter)
@@ -287,13 +279,23 @@ class EntityMapperNode(Node):
             )
         return self.table.index(name)
 
+    # --- topics
+
+    @guarded('map')
     def on_map(self, msg: OccupancyGrid) -> None:
         try:
-            convert.check_map_info(msg.info, max_cells=2**31)
+            limit = self.param('max_cells')
+            convert.check_map_info(msg.info, max_cells=limit)
             if len(msg.data) != msg.info.width * msg.info.height:
                 raise ValueError(
                     f'map data has {len(msg.data)} values, but width x height = '
                     f'{msg.info.width}x{msg.info.height}'
+                )
+            info = entity_info(msg.info, self.param('cell_size'))
+            if info.width * info.height > limit:
+                raise ValueError(
+                    f'its entity map at cell_size={self.param("cell_size"):g} m would have '
+                    f'{info.width}x{info.height} cells, more than max_cells={limit}'
                 )
         except ValueError as exc:
             self.report('map', DiagnosticStatus.WARN, f'map rejected: {exc}')
@@ -307,7 +309,9 @@ class EntityMapperNode(Node):
         self.map_msg = msg
         self.publish()
 
+    @guarded('landmarks')
     def on_landmarks(self, msg: MarkerArray) -> None:
+        skipped = []
         for marker in msg.markers:
             key = (marker.ns, marker.id)
             if marker.action == Marker.DELETEALL:
@@ -315,18 +319,21 @@ class EntityMapperNode(Node):
             elif marker.action == Marker.DELETE:
                 self.markers.pop(key, None)
             elif marker.action == Marker.ADD and marker.type in PLACE_TYPES:
-                p = marker.pose.position
-                self.markers[key] = Landmark(
-                    marker.text.strip() or marker.ns,
-                    p.x,
-                    p.y,
-                    max(marker.scale.x, 0.0),
-                    max(marker.scale.y, 0.0),
-                    marker.header.frame_id,
-                )
+                try:
+                    self.markers[key] = marker_landmark(marker, self.param('max_landmark_size'))
+                except ValueError as exc:  # the rest of the array still counts
+                    self.markers.pop(key, None)
+                    skipped.append(str(exc))
+        if skipped:
+            self.report(
+                'landmarks',
+                DiagnosticStatus.WARN,
+                f'skipped {len(skipped)} bad markers: ' + '; '.join(skipped[:10]),
+                skipped=len(skipped),
+            )
         self.publish()
 
-    def landmark_cells(self, grid: np.ndarray, info: MapMetaData) -> list[str]:
+    def landmark_cells(self, grid: np.ndarray, info) -> list[str]:
         """Paint every landmark's kind over its footprint; return the problems, one per line."""
         frame = self.map_msg.header.frame_id
         problems = []
@@ -355,7 +362,7 @@ class EntityMapperNode(Node):
 
     def publish(self) -> None:
         """Build the entity map from the held SLAM map and landmarks, and publish it."""
-        if self.map_msg is None:
+        if self.map_msg is None or not self.active:
             return
         info = entity_info(self.map_msg.info, self.param('cell_size'))
         grid = entity_cells(

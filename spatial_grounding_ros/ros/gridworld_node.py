@@ -26,7 +26,7 @@ from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
-from nav_msgs.msg import OccupancyGrid
+from nav_msgs.msg import OccupancyGrid, Path
 import numpy as np
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
@@ -169,6 +169,9 @@ class GridWorldNode(Node):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self.create_subscription(Int32, topics.ACTION, self.on_action, STREAM)
         self.create_subscription(PoseStamped, topics.GOAL_POSE, self.on_goal_pose, 10)
+        # the grounder's goal_path: the rest of a sequence after goal_pose; empty: stop
+        self.create_subscription(Path, topics.GOAL_PATH, self.on_goal_path, 10)
+        self.next_goals: list[tuple[int, int]] = []  # a sequence's goals after path_goal
         self.create_service(Trigger, topics.RESET_EPISODE, self.on_reset)
         self.create_service(Trigger, topics.NEXT_EPISODE, self.on_next)
         self.path_policy: np.ndarray | None = None  # greedy actions toward a goal_pose
@@ -300,9 +303,29 @@ class GridWorldNode(Node):
                 'goal_pose ignored: the episode is over (call next_episode)',
             )
             return
+        self.walk_to(cell)
+        self.next_goals = []
+        self.report('goal_pose', DiagnosticStatus.OK, f'walking from {self.env.agent} to {cell}')
+
+    def walk_to(self, cell: tuple[int, int]) -> None:
         self.path_policy = world.greedy_policy(self.path_values(cell))
         self.path_goal = cell
-        self.report('goal_pose', DiagnosticStatus.OK, f'walking from {self.env.agent} to {cell}')
+
+    def on_goal_path(self, msg: Path) -> None:
+        """Stop the agent on an empty path (a stop); else walk its goals after goal_pose next."""
+        if not msg.poses:
+            self.path_policy, self.next_goals = None, []
+            self.report('goal_path', DiagnosticStatus.OK, f'stopped at {self.env.agent}')
+            return
+        cells = [
+            convert.point_to_cell(p.pose.position.x, p.pose.position.y, self.info)
+            for p in msg.poses
+        ]
+        if None in cells or (msg.header.frame_id or self.frame_id) != self.frame_id:
+            self.report('goal_path', DiagnosticStatus.WARN, 'goal_path ignored: off the map')
+            return
+        if cells[0] == self.path_goal:  # the path of the goal_pose just taken
+            self.next_goals = cells[1:]
 
     def path_values(self, cell: tuple[int, int]) -> np.ndarray:
         """
@@ -322,6 +345,8 @@ class GridWorldNode(Node):
             return
         if self.env.agent == self.path_goal:
             self.path_policy = None
+            if self.next_goals:  # a sequence's next step
+                self.walk_to(self.next_goals.pop(0))
             return
         self.move(int(self.path_policy[self.env.agent]))
 

@@ -12,59 +12,66 @@ loads the checkpoint and the entity table and creates the topics and the ground_
 service; activate starts grounding; deactivate stops it (and drops the held instruction);
 cleanup releases all. `autostart` (the default) configures and activates at start-up.
 
-While active it holds the latest valid entity_map and instruction and grounds when both are
-there (an instruction waits for a map at most instruction_timeout), publishing goal_pose (none
-on a decline), value_map, value_map_raw, value_map_image, relation_map and a diagnostic (OK,
-or WARN naming the decline's reason); the node's state is on /diagnostics every second. Bad
-input gets a warning, a WARN diagnostic, no goal, and the node keeps running. The service
-ground_instruction (ground_service.py) answers one instruction without publishing. Topic names
-are fixed and relative: remap them (`-r goal_pose:=...`).
+While active it holds the latest valid entity_map and instruction (core/instruction_hold.py has
+the rules) and grounds when both are there, publishing goal_pose (none on a decline, a stop or a
+question), goal_path (a sequence's goals; empty for a stop), value_map, value_map_raw,
+value_map_image, relation_map and a diagnostic naming the intent; the node's state is on
+/diagnostics every second. Bad input gets a warning, a WARN diagnostic, no goal, and the node
+keeps running. The service ground_instruction answers one instruction without publishing, or
+refuses it at once as `busy` when max_pending_requests are in flight.
+
+Threads (spin() runs the node in a MultiThreadedExecutor of executor_threads()): the inputs in
+one callback group, topic groundings in another (a guard condition the inputs trigger), service
+requests in a reentrant one and the status and lifecycle in the default one, so a long grounding
+neither stops the status nor the inputs. One grounding runs at a time (the model lock).
 """
 
 from __future__ import annotations
 
 import sys
-import time
+import threading
 from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
-from nav_msgs.msg import OccupancyGrid
+from nav_msgs.msg import OccupancyGrid, Path
 import numpy as np
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
-from rclpy.lifecycle import (
-    LifecycleNode,
-    LifecyclePublisher,
-    LifecycleState,
-    TransitionCallbackReturn,
-)
-from rclpy.publisher import Publisher
-from rclpy.service import Service
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import Image
 from spatial_grounding_interfaces.srv import GroundInstruction
 from std_msgs.msg import Float32MultiArray, Header, String
 import torch
 
 from . import convert
-from .ground_service import answer, goal_pose
+from .ground_service import grounding_report, intent, Poser, refuse, response
 from .grounder_parameters import PARAMETERS
 from .node_support import (
+    autostart,
     declare_parameters,
+    destroy_entities,
+    error_text,
     guard_change_state,
+    guarded,
     publish_status,
     report,
     SEE_OVERRIDES,
     spin,
 )
 from .package_files import find_config
-from .qos import LATCHED
+from .qos import BURST, LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
+from ..core.instruction_hold import Dropped, goal_stamp, InstructionHold
 from ..grounder import Grounder, Grounding
 from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
 STEADY = ClockType.STEADY_TIME  # instruction_timeout is wall time, also under use_sim_time
+# executor threads beyond those service requests may block: the inputs, topic groundings, the
+# status and lifecycle, and one to refuse a request as busy at once
+SPARE_THREADS = 4
 
 
 class GrounderNode(LifecycleNode):
@@ -80,53 +87,63 @@ class GrounderNode(LifecycleNode):
         self.topics = []  # publishers, subscriptions and the service of configure
         self.expiry_timer = None
         self.robot_yaw: float | None = None  # of the latest robot_pose (goal_heading: keep)
+        self.model_lock = threading.Lock()  # one grounding at a time: torch, the text cache
+        self.state_lock = threading.RLock()  # the hold and the map, shared by the callbacks
+        self.requests = 0  # ground_instruction requests in flight
+        self.grounding = ''  # the instruction a topic grounding works on
+        self.hold = InstructionHold()
+        self.input_group = MutuallyExclusiveCallbackGroup()
+        self.service_group = ReentrantCallbackGroup()
+        # topic groundings run here, triggered by the inputs, so the inputs are taken meanwhile
+        self.ground_trigger = self.create_guard_condition(
+            self.on_ground_trigger, MutuallyExclusiveCallbackGroup()
+        )
         self.release_input()
-        # diagnostics in every state: they say why an instruction was not grounded
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        # diagnostics in every state: they say why an instruction was not grounded; deep
+        # enough for a burst's reports
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 100)
         publish_status(self, self.diagnostics_pub, self.status)
-        if not self.param('autostart'):
-            self.get_logger().info(
-                f'unconfigured: waiting for a lifecycle manager on '
-                f'{self.get_fully_qualified_name()}/change_state'
-            )
-            return
-        self.autostarting = True  # a failed configure is then main()'s one error line
-        try:
-            if self.trigger_configure() != TransitionCallbackReturn.SUCCESS:
-                raise ValueError(self.configure_error)
-            self.trigger_activate()
-        finally:
-            self.autostarting = False
+        autostart(self)
 
     def param(self, name: str):
         return self.get_parameter(name).value
+
+    def executor_threads(self) -> int:
+        """Threads spin() gives the node: every request in flight may wait for the model."""
+        return self.param('max_pending_requests') + SPARE_THREADS
 
     def state_label(self) -> str:
         return 'active' if self.active else 'inactive' if self.grounder else 'unconfigured'
 
     def status(self) -> tuple[bytes, str, dict]:
-        """Return the 1 Hz status: the lifecycle state, the map held, an instruction waiting."""
+        """Return the 1 Hz status: the state, the map held, the instructions and requests."""
         values = {
             'state': self.state_label(),
             'map': 'none' if self.grid is None else '{}x{}'.format(*self.grid.shape),
-            'instruction_waiting': self.instruction if self.instruction_pending else '',
+            'instruction_waiting': self.hold.text if self.hold.pending else '',
+            'grounding': self.grounding,
+            'requests_in_flight': self.requests,
         }
         if self.grounder is None and self.configure_error:
             return DiagnosticStatus.WARN, f'configure failed: {self.configure_error}', values
         return DiagnosticStatus.OK, values['state'], values
 
     def release_input(self) -> None:
-        self.grid: np.ndarray | None = None  # latest valid map, row 0 = north
-        self.map_msg: OccupancyGrid | None = None
-        self.drop_instruction()
+        with self.state_lock:
+            self.grid: np.ndarray | None = None  # latest valid map, row 0 = north
+            self.map_msg: OccupancyGrid | None = None
+            self.drop_instruction('inactive')
 
-    def drop_instruction(self) -> None:
-        self.instruction: str | None = None  # latest valid instruction
-        self.instruction_pending = False  # not yet grounded on any map
-        self.instruction_received = 0.0  # time.monotonic() of its arrival
-        if self.expiry_timer is not None:
-            self.destroy_timer(self.expiry_timer)
-            self.expiry_timer = None
+    def drop_instruction(self, why: str) -> Dropped | None:
+        with self.state_lock:
+            self.cancel_expiry()
+            return self.hold.drop(why)
+
+    def cancel_expiry(self) -> None:
+        with self.state_lock:
+            if self.expiry_timer is not None:
+                self.destroy_timer(self.expiry_timer)
+                self.expiry_timer = None
 
     # --- lifecycle transitions
 
@@ -134,36 +151,42 @@ class GrounderNode(LifecycleNode):
         try:
             self.load_model()
         except Exception as exc:  # noqa: BLE001 - rclpy would swallow it: say what failed
-            self.configure_error = (
-                str(exc)
-                if isinstance(exc, (ValueError, OSError))
-                else f'{type(exc).__name__}: {exc}'
-            )
+            self.configure_error = error_text(exc, (ValueError, OSError))
             if not self.autostarting:
                 self.get_logger().error(f'configure failed: {self.configure_error}')
             return TransitionCallbackReturn.FAILURE
         self.configure_error = ''
         publisher = self.create_lifecycle_publisher
         self.goal_pub = publisher(PoseStamped, topics.GOAL_POSE, 10)
+        self.path_pub = publisher(Path, topics.GOAL_PATH, 10)
         self.value_map_pub = publisher(OccupancyGrid, topics.VALUE_MAP, LATCHED)
         self.value_raw_pub = publisher(Float32MultiArray, topics.VALUE_MAP_RAW, LATCHED)
         self.value_image_pub = publisher(Image, topics.VALUE_MAP_IMAGE, LATCHED)
         self.relation_map_pub = publisher(OccupancyGrid, topics.RELATION_MAP, LATCHED)
-        subscription = self.create_subscription
+        subscription, group = self.create_subscription, self.input_group
         self.topics = [
             self.goal_pub,
+            self.path_pub,
             self.value_map_pub,
             self.value_raw_pub,
             self.value_image_pub,
             self.relation_map_pub,
-            subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED),
-            subscription(String, topics.INSTRUCTION, self.on_instruction, 10),
-            subscription(PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10),
-            # ground_service.answer: one grounding per request, nothing published
+            subscription(
+                OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED,
+                callback_group=group,
+            ),
+            subscription(
+                String, topics.INSTRUCTION, self.on_instruction, BURST, callback_group=group
+            ),
+            subscription(
+                PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10, callback_group=group
+            ),
             self.create_service(
                 GroundInstruction,
                 topics.GROUND_INSTRUCTION,
-                lambda request, response: answer(self, request, response),
+                self.on_ground_request,
+                qos_profile=BURST,
+                callback_group=self.service_group,
             ),
         ]
         return super().on_configure(state)
@@ -194,8 +217,9 @@ class GrounderNode(LifecycleNode):
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         # a goal from an instruction given before the pause would surprise: drop it
-        self.active = False
-        self.drop_instruction()
+        with self.state_lock:
+            self.active = False
+            self.drop_instruction('inactive')
         self.get_logger().info('inactive: instructions are not grounded')
         return super().on_deactivate(state)
 
@@ -214,40 +238,34 @@ class GrounderNode(LifecycleNode):
     def release(self) -> None:
         """Give back what configure took: the model, the held input, the topics, the service."""
         self.active = False
-        for entity in self.topics:
-            if isinstance(entity, LifecyclePublisher):
-                self.destroy_lifecycle_publisher(entity)
-            elif isinstance(entity, Publisher):
-                self.destroy_publisher(entity)
-            elif isinstance(entity, Service):
-                self.destroy_service(entity)
-            else:
-                self.destroy_subscription(entity)
-        self.topics = []
-        self.grounder = None
-        self.robot_yaw = None
-        self.release_input()
+        with self.model_lock:  # a grounding under way ends first
+            destroy_entities(self, self.topics)
+            self.topics = []
+            self.grounder = None
+            self.robot_yaw = None
+            self.release_input()
 
     def destroy_node(self) -> None:
         self.release()  # as a shutdown transition would: model and topics first
         super().destroy_node()
 
-    # --- topics
+    # --- topics (the input group: short; groundings run in on_ground_trigger)
 
+    @guarded('entity_map')
     def on_entity_map(self, msg: OccupancyGrid) -> None:
         try:
             grid = convert.occupancy_grid_to_grid(msg, self.param('max_cells'))
             self.grounder.check_grid(grid)
         except ValueError as exc:
             # a stale map could send the robot somewhere that no longer fits: drop it
-            self.grid = self.map_msg = None
+            with self.state_lock:
+                self.grid = self.map_msg = None
             self.report(
                 'entity_map',
                 DiagnosticStatus.WARN,
                 f'entity_map rejected: {exc}; no map held until a valid one arrives',
             )
             return
-        self.grid, self.map_msg = grid, msg
         # an OK per accepted map, naming its stamp: a client can tell that the node holds the
         # map it sent before it sends an instruction (topics are not ordered among each other)
         stamp = msg.header.stamp
@@ -261,14 +279,11 @@ class GrounderNode(LifecycleNode):
             height=grid.shape[0],
             width=grid.shape[1],
         )
-        if self.instruction_pending and self.instruction_expired():
-            self.expire_instruction()  # the timer's tick may not have come yet
-        if (
-            self.active
-            and self.instruction is not None
-            and (self.instruction_pending or self.param('reground_on_map_change'))
-        ):
-            self.ground()
+        with self.state_lock:
+            self.grid, self.map_msg = grid, msg
+            self.report_dropped(self.hold.expire(self.param('instruction_timeout')))
+            if self.active and self.hold.on_map(self.param('reground_on_map_change')):
+                self.ground_trigger.trigger()
 
     def check_text(self, text: str) -> None:
         """Raise ValueError naming what is wrong with an instruction (or the node's state)."""
@@ -287,114 +302,174 @@ class GrounderNode(LifecycleNode):
             )
         self.grounder.check_instruction(text)
 
+    @guarded('instruction')
     def on_instruction(self, msg: String) -> None:
         text = msg.data
         try:
             self.check_text(text)
         except ValueError as exc:
-            self.drop_instruction()
-            self.report('instruction', DiagnosticStatus.WARN, f'instruction rejected: {exc}')
+            dropped = self.drop_instruction('rejected')
+            also = f'; dropped the waiting instruction {dropped.text!r}' if dropped else ''
+            self.report('instruction', DiagnosticStatus.WARN, f'instruction rejected: {exc}{also}')
             return
-        self.drop_instruction()
-        self.instruction, self.instruction_pending = text, True
-        self.instruction_received = time.monotonic()
-        if self.grid is None:
+        with self.state_lock:
+            self.cancel_expiry()
+            self.report_dropped(self.hold.hold(text))
+            if self.grid is not None:
+                self.ground_trigger.trigger()
+                return
             timeout = self.param('instruction_timeout')
             if timeout > 0:
                 self.expiry_timer = self.create_timer(
-                    timeout, self.expire_instruction, clock=Clock(clock_type=STEADY)
+                    timeout,
+                    self.expire_instruction,
+                    clock=Clock(clock_type=STEADY),
+                    callback_group=self.input_group,
                 )
-            self.report(
-                'instruction',
-                DiagnosticStatus.WARN,
-                f'no valid entity_map held yet: holding instruction {text!r} until one arrives'
-                + (f' (for at most {timeout:g} s)' if timeout > 0 else ''),
-            )
-            return
-        self.ground()
+        self.report(
+            'instruction',
+            DiagnosticStatus.WARN,
+            f'no valid entity_map held yet: holding instruction {text!r} until one arrives'
+            + (f' (for at most {timeout:g} s)' if timeout > 0 else ''),
+        )
 
-    def instruction_expired(self) -> bool:
-        timeout = self.param('instruction_timeout')
-        return timeout > 0 and time.monotonic() - self.instruction_received >= timeout
-
+    @guarded('instruction')
     def expire_instruction(self) -> None:
         """Drop an instruction that waited instruction_timeout for a map, saying so."""
-        text, pending = self.instruction, self.instruction_pending
-        self.drop_instruction()
-        if pending:
-            self.report(
-                'instruction',
-                DiagnosticStatus.WARN,
-                f'instruction {text!r} expired: no valid entity_map within '
-                f'instruction_timeout={self.param("instruction_timeout"):g} s; dropped, '
-                'send it again',
-            )
+        with self.state_lock:
+            self.report_dropped(self.drop_instruction('expired'))
 
+    def report_dropped(self, dropped: Dropped | None) -> None:
+        """Say that an instruction was let go of without a grounding (expired, superseded)."""
+        if dropped is None:
+            return
+        if dropped.why == 'expired':
+            message = (
+                f'instruction {dropped.text!r} expired: no valid entity_map within '
+                f'instruction_timeout={self.param("instruction_timeout"):g} s; dropped, '
+                'send it again'
+            )
+        else:
+            message = (
+                f'instruction {dropped.text!r} dropped: a newer instruction came before it '
+                'was grounded'
+            )
+        self.report('instruction', DiagnosticStatus.WARN, message, dropped=dropped.text)
+
+    @guarded('robot_pose')
     def on_robot_pose(self, msg: PoseStamped) -> None:
         yaw = convert.quaternion_yaw(msg.pose.orientation)
         if np.isfinite(yaw):
             self.robot_yaw = yaw
 
+    # --- grounding
+
     def run_grounder(self, grid: np.ndarray, text: str, map_msg: OccupancyGrid) -> Grounding:
-        self.grounder.min_confidence = self.param('min_confidence')  # settable at run time
-        return self.grounder.ground(grid, text, cell_size=map_msg.info.resolution)
+        """Ground one instruction; one at a time (the model lock). ValueError if unconfigured."""
+        with self.model_lock:
+            if self.grounder is None:
+                raise ValueError('the node is not configured')
+            self.grounder.min_confidence = self.param('min_confidence')  # settable at run time
+            return self.grounder.ground(grid, text, cell_size=map_msg.info.resolution)
 
-    def output_header(self, map_msg: OccupancyGrid) -> Header:
-        # the map's stamp: the maps are that map's cells, placed where the map was then
-        return Header(
-            stamp=map_msg.header.stamp,
-            frame_id=map_msg.header.frame_id or self.param('default_frame_id'),
+    def poser(self, map_msg: OccupancyGrid) -> Poser:
+        # the map's stamp (goal_stamp: map): the goal is that map's cell, where the map was then
+        stamp = goal_stamp(
+            self.param('goal_stamp'),
+            map_msg.header.stamp,
+            lambda: self.get_clock().now().to_msg(),
         )
+        frame = map_msg.header.frame_id or self.param('default_frame_id')
+        header = Header(stamp=stamp, frame_id=frame)
+        return Poser(map_msg.info, header, self.param('goal_heading'), self.robot_yaw)
 
-    def ground(self) -> None:
+    @guarded('grounding')
+    def on_ground_trigger(self) -> None:
+        """Ground the held instruction on the held map, if it still waits (the ground group)."""
+        with self.state_lock:
+            text = self.hold.take() if self.active and self.grid is not None else None
+            if text is None:
+                return
+            grid, map_msg = self.grid, self.map_msg
+            self.cancel_expiry()
+        self.grounding = text
         try:
-            result = self.run_grounder(self.grid, self.instruction, self.map_msg)
+            result = self.run_grounder(grid, text, map_msg)
         except Exception as exc:  # noqa: BLE001 - e.g. out of memory in torch: report, go on
             self.report(
                 'grounding',
                 DiagnosticStatus.ERROR,
-                f'grounding {self.instruction!r} failed: {type(exc).__name__}: {exc}',
+                f'grounding {text!r} failed: {type(exc).__name__}: {exc}',
             )
             return
-        self.instruction_pending = False
-        if self.expiry_timer is not None:
-            self.destroy_timer(self.expiry_timer)
-            self.expiry_timer = None
-        info = self.map_msg.info
-        header = self.output_header(self.map_msg)
+        finally:
+            self.grounding = ''
+        if self.active:  # not deactivated meanwhile
+            self.publish(result, map_msg)
+
+    def publish(self, result: Grounding, map_msg: OccupancyGrid) -> None:
+        info, poser = map_msg.info, self.poser(map_msg)
+        header = Header(stamp=map_msg.header.stamp, frame_id=poser.header.frame_id)
         # goal first: it is what a planner waits for; a declined grounding sends none
-        if result.goal is not None:
-            self.goal_pub.publish(goal_pose(self, result.goal, result, info, header))
-        self.value_map_pub.publish(
-            convert.value_map_to_occupancy_grid(
-                result.values, header, info, self.param('value_map_encoding')
+        goal = poser.goal(result) if result.reason is None else None
+        if goal is not None:
+            self.goal_pub.publish(goal)
+        if goal is not None or intent(result) == 'stop':
+            self.path_pub.publish(poser.path(result))  # a stop's is empty
+        if result.values is not None and np.size(result.values):
+            self.value_map_pub.publish(
+                convert.value_map_to_occupancy_grid(
+                    result.values, header, info, self.param('value_map_encoding')
+                )
             )
-        )
-        self.value_raw_pub.publish(convert.value_map_to_float32_multiarray(result.values))
-        self.value_image_pub.publish(convert.value_map_to_image(result.values, header))
-        self.relation_map_pub.publish(
-            convert.magnitude_to_occupancy_grid(result.relation_map, header, info)
-        )
-        if result.goal is None:
-            self.report(
-                'grounding',
-                DiagnosticStatus.WARN,
-                f'declined {result.instruction!r}: {result.reason}; no goal sent',
-                reason=result.reason,
-                confidence=f'{result.confidence:.3f}',
+            self.value_raw_pub.publish(convert.value_map_to_float32_multiarray(result.values))
+            self.value_image_pub.publish(convert.value_map_to_image(result.values, header))
+        if result.relation_map is not None and np.size(result.relation_map):
+            self.relation_map_pub.publish(
+                convert.magnitude_to_occupancy_grid(result.relation_map, header, info)
             )
-            return
-        message = f'grounded {result.instruction!r} at cell (row, col) {result.goal}'
-        if result.unknown_words:
-            message += f'; ignored unknown words {result.unknown_words}'
-        self.report(
-            'grounding',
-            DiagnosticStatus.OK,
-            message,
-            goal_row=result.goal[0],
-            goal_col=result.goal[1],
-            confidence=f'{result.confidence:.3f}',
-        )
+        level, message, values = grounding_report(result)
+        self.report('grounding', level, message, **values)
+
+    def on_ground_request(self, request, reply):
+        """Answer GroundInstruction at once when max_pending_requests are in flight: busy."""
+        with self.state_lock:
+            limit = self.param('max_pending_requests')
+            if self.requests >= limit:
+                return refuse(
+                    reply,
+                    f'busy: {self.requests} requests in flight (max_pending_requests={limit}); '
+                    'try again',
+                )
+            self.requests += 1
+        try:
+            return self.answer(request, reply)
+        finally:
+            with self.state_lock:
+                self.requests -= 1
+
+    def answer(self, request, reply):
+        """One grounding, nothing published, nothing held; a refusal says why, never raises."""
+        try:
+            self.check_text(request.instruction)
+            map_msg = request.entity_map
+            if len(map_msg.data) == 0:
+                with self.state_lock:
+                    grid, map_msg = self.grid, self.map_msg
+                if grid is None:
+                    raise ValueError(
+                        'the request has no entity_map (empty data) and no valid entity_map '
+                        'is held'
+                    )
+            else:
+                grid = convert.occupancy_grid_to_grid(map_msg, self.param('max_cells'))
+                self.grounder.check_grid(grid)
+            result = self.run_grounder(grid, request.instruction, map_msg)
+            return response(reply, result, self.poser(map_msg))
+        except Exception as exc:  # noqa: BLE001 - an answer, never a crash of the node
+            reason = error_text(exc, (ValueError,))
+            self.get_logger().debug(f'ground_instruction refused: {reason}')
+            return refuse(reply, reason)
 
     def report(self, part: str, level: bytes, message: str, **values) -> None:
         report(self, self.diagnostics_pub, part, level, message, **values)

@@ -10,9 +10,8 @@ from __future__ import annotations
 
 from . import convert
 from .node_support import Param
+from ..core.instruction_hold import GOAL_STAMPS
 from ..grounder import DEFAULT_CHECKPOINT, MIRROR_AVERAGE_CELLS
-
-GOAL_STAMPS = ('map', 'now')
 
 PARAMETERS = (
     Param(
@@ -25,9 +24,10 @@ PARAMETERS = (
     ),
     Param(
         'entity_table',
-        'entities_puddleworld.yaml',
-        'entity table naming the entity_map cell values: a file in config/ or a path; any '
-        'table for a PuddleWorld model (its landmarks are read by role), only its own for '
+        'entities_office.yaml',
+        'entity table naming the entity_map cell values: a file in config/ or a path (the '
+        "entity mapper's default is the same; PuddleWorld maps need entities_puddleworld.yaml); "
+        'any table for a PuddleWorld model (its landmarks are read by role), only its own for '
         'another model (checked on configure)',
         read_only=True,
         non_empty=True,
@@ -49,6 +49,15 @@ PARAMETERS = (
         high=4096 * 4096,
     ),
     Param('max_instruction_chars', 500, 'longer instructions are rejected', low=1, high=100000),
+    Param(
+        'max_pending_requests',
+        16,
+        'ground_instruction requests in flight at once (one grounds, the rest wait for it); '
+        'one more is refused at once with reason busy',
+        read_only=True,
+        low=1,
+        high=256,
+    ),
     Param(
         'reground_on_map_change',
         False,

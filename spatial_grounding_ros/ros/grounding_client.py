@@ -25,6 +25,7 @@ The client spins a node of its own while it waits, so the caller never handles a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import time
 
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
@@ -36,7 +37,11 @@ from spatial_grounding_interfaces.srv import GroundInstruction
 from std_msgs.msg import Header
 
 from . import convert
+from .qos import BURST
 from ..core import topics
+
+# how often a waiting call checks that the server is still there (seconds)
+LIVENESS_PERIOD = 0.25
 
 
 @dataclass
@@ -49,6 +54,11 @@ class GroundingAnswer:
     goal: PoseStamped | None  # None unless success
     alternatives: list[tuple[PoseStamped, float]] = field(default_factory=list)  # best first
     unknown_words: list[str] = field(default_factory=list)
+    # go, stop, question, sequence, negation, unsupported ('' for a refused request)
+    intent: str = 'go'
+    steps: list[PoseStamped] = field(default_factory=list)  # a sequence's goals, in order
+    answer: str = ''  # a question's answer in words
+    referent: PoseStamped | None = None  # the landmark's cell centre, None when there is none
 
     @classmethod
     def from_response(cls, response: GroundInstruction.Response) -> 'GroundingAnswer':
@@ -56,13 +66,22 @@ class GroundingAnswer:
             success=response.success,
             reason=response.reason,
             confidence=float(response.confidence),
-            goal=response.goal if response.success else None,
+            # a stop or a question succeeds without a goal (frame_id '')
+            goal=response.goal if response.success and response.goal.header.frame_id else None,
             alternatives=[
                 (pose, float(score))
                 for pose, score in zip(response.alternatives, response.alternative_scores)
             ],
             unknown_words=list(response.unknown_words),
+            intent=response.intent,
+            steps=list(response.steps),
+            answer=response.answer,
+            referent=response.referent if response.referent.header.frame_id else None,
         )
+
+
+class GroundingLost(ConnectionError):
+    """The grounder went away (a restart, a crash) while a call was in flight: no answer comes."""
 
 
 class GroundingClient:
@@ -82,7 +101,9 @@ class GroundingClient:
     ):
         self.timeout = timeout
         self.node = Node(node_name, namespace=namespace or '/', context=context)
-        self.client = self.node.create_client(GroundInstruction, topics.GROUND_INSTRUCTION)
+        self.client = self.node.create_client(
+            GroundInstruction, topics.GROUND_INSTRUCTION, qos_profile=BURST
+        )
         self.executor = SingleThreadedExecutor(context=self.node.context)
         self.executor.add_node(self.node)
 
@@ -104,6 +125,9 @@ class GroundingClient:
         """
         Ground `instruction`; the answer, or TimeoutError after `timeout` seconds.
 
+        GroundingLost when the server leaves while the call is in flight (a restart): the call
+        is lost and no answer will come.
+
         `timeout`: default the client's.
 
         `entity_map`: an OccupancyGrid, a (H, W) grid of entity indices (row 0 = north; 1 m
@@ -120,7 +144,16 @@ class GroundingClient:
         if not self.wait_for_server(timeout):
             raise TimeoutError(f'no {self.service_name} service within {timeout} s')
         future = self.client.call_async(request)
-        self.executor.spin_until_future_complete(future, timeout_sec=timeout)
+        deadline = time.monotonic() + timeout
+        while not future.done() and time.monotonic() < deadline:
+            self.executor.spin_until_future_complete(future, timeout_sec=LIVENESS_PERIOD)
+            if not future.done() and not self.client.service_is_ready():
+                # the server left the graph: its queue and the call in it are gone
+                self.client.remove_pending_request(future)
+                raise GroundingLost(
+                    f'{self.service_name} went away with the call in flight: it was lost '
+                    '(the grounder restarted or stopped); call again once it is back'
+                )
         if not future.done():
             self.client.remove_pending_request(future)
             raise TimeoutError(f'{self.service_name} did not answer within {timeout} s')

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import faulthandler
+import functools
 import gc
 import math
 import os
@@ -37,10 +38,18 @@ from rcl_interfaces.msg import (
 import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import (
+    ExternalShutdownException,
+    MultiThreadedExecutor,
+    SingleThreadedExecutor,
+)
+from rclpy.lifecycle import LifecyclePublisher, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
+from rclpy.service import Service
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
 from std_msgs.msg import Header
 
 from ..core.allocator import keep_freed_memory
@@ -216,6 +225,79 @@ def report(
     )
 
 
+def error_text(exc: Exception, plain: tuple[type, ...] = (ValueError,)) -> str:
+    """Return an error's words: its message for the `plain` types, else with its type's name."""
+    return str(exc) if isinstance(exc, plain) else f'{type(exc).__name__}: {exc}'
+
+
+def guarded(part: str):
+    """
+    Decorate a node's callback so that no error ends the process.
+
+    An error a callback did not expect becomes an ERROR diagnostic named `part` (through the
+    node's report method) and the node keeps serving: rclpy's executor would re-raise it out of
+    spin().
+    """
+
+    def wrap(method):
+        @functools.wraps(method)
+        def call(self, *args):
+            try:
+                return method(self, *args)
+            except Exception as exc:  # noqa: BLE001 - the node must outlive any input
+                try:
+                    self.report(
+                        part,
+                        DiagnosticStatus.ERROR,
+                        f'{part}: unexpected {type(exc).__name__}: {exc}; the input was '
+                        'skipped, the node goes on',
+                    )
+                except Exception:  # noqa: BLE001, S110 - nothing is left to tell it with
+                    pass
+                return None
+
+        return call
+
+    return wrap
+
+
+def autostart(node) -> None:
+    """
+    Configure and activate a lifecycle node at start-up, unless its `autostart` is false.
+
+    A failed configure raises ValueError with the node's configure_error (main()'s one error
+    line); with autostart false the node waits, unconfigured, for a lifecycle manager.
+    """
+    if not node.get_parameter('autostart').value:
+        node.get_logger().info(
+            f'unconfigured: waiting for a lifecycle manager on '
+            f'{node.get_fully_qualified_name()}/change_state'
+        )
+        return
+    node.autostarting = True  # a failed configure is then main()'s one error line
+    try:
+        if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+            raise ValueError(node.configure_error)
+        node.trigger_activate()
+    finally:
+        node.autostarting = False
+
+
+def destroy_entities(node: Node, entities: Iterable) -> None:
+    """Destroy a node's publishers, subscriptions, services and timers (as configure made them)."""
+    for entity in entities:
+        if isinstance(entity, LifecyclePublisher):
+            node.destroy_lifecycle_publisher(entity)
+        elif isinstance(entity, Publisher):
+            node.destroy_publisher(entity)
+        elif isinstance(entity, Service):
+            node.destroy_service(entity)
+        elif isinstance(entity, Subscription):
+            node.destroy_subscription(entity)
+        elif isinstance(entity, Timer):
+            node.destroy_timer(entity)
+
+
 def guard_change_state(node: Node, state_label: Callable[[], str]) -> None:
     """
     Answer a change_state request for a transition the current state does not have.
@@ -298,13 +380,27 @@ def spin(make_node: Callable[..., Node], name: str, args: list[str] | None = Non
     os._exit(code)
 
 
+def make_executor(node: Node, context=None):
+    """
+    Return the executor a node spins in.
+
+    A MultiThreadedExecutor of node.executor_threads() threads for a node with callback groups
+    of its own (the grounder, the mapper), else a SingleThreadedExecutor.
+    """
+    threads = getattr(node, 'executor_threads', None)
+    context = context or node.context
+    if threads is None:
+        return SingleThreadedExecutor(context=context)
+    return MultiThreadedExecutor(num_threads=threads(), context=context)
+
+
 def _run(make_node: Callable[[], Node], name: str, args: list[str] | None) -> int:
     try:
         rclpy.init(args=args)
     except RuntimeError as exc:  # rclpy's RCLError: a missing or malformed --params-file, ...
         print(f'{name}: error: {str(exc).splitlines()[0]}', file=sys.stderr)
         return 1
-    node = None
+    node = executor = None
     try:
         node = make_node(**SEE_OVERRIDES)
         publish_status(node)  # unless the node publishes its own
@@ -313,13 +409,17 @@ def _run(make_node: Callable[[], Node], name: str, args: list[str] | None) -> in
         # the callbacks' latency
         gc.collect()
         gc.freeze()
-        rclpy.spin(node)
+        executor = make_executor(node)
+        executor.add_node(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ValueError, FileNotFoundError) as exc:  # bad parameter, checkpoint, table, data
         print(f'{name}: error: {exc}', file=sys.stderr)
         return 1
     finally:
+        if executor is not None:
+            executor.shutdown(timeout_sec=0)
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

@@ -12,7 +12,11 @@ from pathlib import Path
 import subprocess
 import sys
 
-MODULES = {'gridworld': 'gridworld_node', 'grounder': 'grounder_node'}
+MODULES = {
+    'gridworld': 'gridworld_node',
+    'grounder': 'grounder_node',
+    'entity_mapper': 'entity_mapper_node',
+}
 
 
 def executable(name: str) -> list[str]:

@@ -16,3 +16,6 @@ LATCHED = QoSProfile(
 # One message per event (a move's agent_pose, reward and terminated; an action): deep enough
 # that a client pairing the topics by count never loses one.
 STREAM = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+# Services and instructions under bursts: a request the node has not yet taken waits here, so
+# deep that a burst is taken and answered (or refused as busy) rather than lost in the queue.
+BURST = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)

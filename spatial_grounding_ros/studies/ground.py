@@ -66,6 +66,11 @@ def summary(g: Grounding) -> dict:
         'landmarks': g.landmarks,
         'unknown_words': g.unknown_words,
         'model_instruction': g.model_instruction,
+        # what the instruction asks (go, stop, question, sequence, ...); a sequence's steps'
+        # goals in order; a question's answer
+        'intent': g.intent,
+        'steps': [None if s.goal is None else list(s.goal) for s in g.steps],
+        'answer': g.answer,
     }
 
 
