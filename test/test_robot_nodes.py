@@ -373,8 +373,6 @@ def test_a_call_in_flight_is_reported_lost_when_the_server_goes_away(ros_context
         context.try_shutdown()
 
 
-
-
 def test_a_sequence_sends_its_first_goal_and_the_whole_goal_path(robot):
     """'go to the fridge then the printer': goal_pose is the first step, goal_path both."""
     from nav_msgs.msg import Path as PathMsg
