@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
-from .core.footprints import reduce_footprints
+from .core.footprints import footprints, reduce_footprints
 from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .language.approach import approach_for
@@ -341,6 +341,9 @@ class Grounder:
         if approach is not None:
             goal, referent, reason = approach.goal, approach.referent, reason or approach.reason
             alternatives = [(cell, self.probability(values, cell)) for cell in approach.others]
+            # the robot stops beside the landmark, whichever side the network favoured: the
+            # chance that it is the place meant is the mass on the landmark and around it
+            confidence = self.around(values, grid, referent)
         if reason is None and int(grid[goal]) in self.entities.never_goal:
             reason = 'goal-on-obstacle'
         if reason is None and confidence < self.min_confidence:
@@ -455,6 +458,21 @@ class Grounder:
         """Return a cell's calibrated probability, as judge() gives the best cell's."""
         flat = values.astype(np.float64) / self.temperature
         return float(np.exp(flat[cell] - flat.max()) / np.exp(flat - flat.max()).sum())
+
+    def around(self, values: np.ndarray, grid: np.ndarray, cell: tuple[int, int]) -> float:
+        """Return the calibrated mass on the landmark at `cell` and the cells touching it."""
+        groups = footprints(grid, int(grid[cell]))
+        [footprint] = [f for f in groups if tuple(cell) in map(tuple, f)]
+        near = np.zeros(grid.shape, dtype=bool)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rows, cols = footprint[:, 0] + dr, footprint[:, 1] + dc
+                h, w = grid.shape
+                inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
+                near[rows[inside], cols[inside]] = True
+        flat = values.astype(np.float64) / self.temperature
+        p = np.exp(flat - flat.max())
+        return float(p[near].sum() / p.sum())
 
     def named(self, mentions: list[Mention]) -> list[str]:
         """Return the table's names of the landmarks mentioned, each once, in order."""

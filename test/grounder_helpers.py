@@ -37,8 +37,11 @@ try:
     from rclpy.parameter import Parameter
 
     PUDDLEWORLD_TABLE = Parameter('entity_table', value=PUDDLEWORLD_YAML)
+    # the small untrained checkpoints here are never calibrated: their confidence means little,
+    # and the default min_confidence (0.1) would decline their every goal
+    ANY_CONFIDENCE = Parameter('min_confidence', value=0.0)
 except ImportError:  # the tests that need it skip without rclpy
-    PUDDLEWORLD_TABLE = None
+    PUDDLEWORLD_TABLE = ANY_CONFIDENCE = None
 
 
 def unique_namespace(base: str) -> str:

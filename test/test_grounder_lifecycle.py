@@ -23,6 +23,7 @@ pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import (  # noqa: E402
+    ANY_CONFIDENCE,
     make_probe,
     PUDDLEWORLD_TABLE,
     random_checkpoint,
@@ -80,6 +81,7 @@ def start(graph, namespace, checkpoint):
             parameter_overrides=[
                 Parameter('checkpoint', value=str(checkpoint)),
                 PUDDLEWORLD_TABLE,
+                ANY_CONFIDENCE,
                 Parameter('autostart', value=False),
                 Parameter('torch_threads', value=0),
             ],
@@ -188,6 +190,7 @@ def test_autostart_is_active_at_once(ros_context, checkpoint):
             parameter_overrides=[
                 Parameter('checkpoint', value=str(checkpoint)),
                 PUDDLEWORLD_TABLE,
+                ANY_CONFIDENCE,
                 Parameter('torch_threads', value=0),
             ],
         )

@@ -24,6 +24,7 @@ pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402, I100
 from grounder_helpers import (  # noqa: E402
+    ANY_CONFIDENCE,
     make_probe,
     PUDDLEWORLD_TABLE,
     random_checkpoint,
@@ -51,7 +52,7 @@ def checkpoint(tmp_path_factory):
 
 @pytest.fixture(scope='module')
 def reference(checkpoint):
-    return Grounder.from_checkpoint(str(checkpoint))
+    return Grounder.from_checkpoint(str(checkpoint), min_confidence=0.0)
 
 
 @pytest.fixture(scope='module')
@@ -64,6 +65,7 @@ def nodes(ros_module_context, checkpoint):
             parameter_overrides=[
                 Parameter('checkpoint', value=str(checkpoint)),
                 PUDDLEWORLD_TABLE,
+                ANY_CONFIDENCE,
                 Parameter('max_cells', value=MAX_CELLS),
                 Parameter('max_instruction_chars', value=MAX_CHARS),
                 # leave torch's thread count to the rest of the test session

@@ -20,6 +20,7 @@ import pytest
 pytest.importorskip('rclpy', reason='rclpy is not installed')
 
 from grounder_helpers import (  # noqa: E402,I100
+    ANY_CONFIDENCE,
     make_probe,
     north_east_checkpoint,
     PUDDLEWORLD_TABLE,
@@ -39,7 +40,8 @@ def start(graph, namespace, overrides=()):
             context=graph.context,
             namespace=namespace,
             parameter_overrides=[
-                Parameter('torch_threads', value=0), PUDDLEWORLD_TABLE, *overrides
+                Parameter('torch_threads', value=0), PUDDLEWORLD_TABLE, ANY_CONFIDENCE,
+                *overrides
             ],
         )
     )

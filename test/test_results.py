@@ -145,6 +145,8 @@ def readme_section(heading: str) -> str:
         ('Results: honest answers', 'honesty.md'),
         ('Results: the node under noise words', 'robustness_grounder.md'),
         ('Results: landmark kinds by name or by role', 'kinds_ablation.md'),
+        ('Results: natural wording (dev)', 'natural_dev.md'),
+        ('Results: natural wording (held out)', 'natural_held_out.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):

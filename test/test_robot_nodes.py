@@ -416,3 +416,24 @@ def test_a_question_is_answered_in_the_service_and_the_diagnostic(robot):
         answer = client.ground('where is the fridge?')
     assert answer.success and answer.intent == 'question' and answer.answer
     assert answer.goal is None and answer.referent is not None
+
+
+def test_a_negation_and_a_motion_are_declined_with_their_intent(robot):
+    """Send no goal for "don't go to the fridge" and "follow me", over the topic or the service."""
+    from spatial_grounding_ros.ros.grounding_client import GroundingClient
+    from std_msgs.msg import String
+
+    graph, namespace, probe, _ = robot
+    hold_entity_map(graph, probe, namespace, office_grid())
+    goals = len(probe.goals)
+    with GroundingClient(namespace, context=graph.context, timeout=WAIT) as client:
+        for text, intent in (("don't go to the fridge", 'negation'), ('follow me', 'unsupported')):
+            answer = client.ground(text)
+            assert not answer.success and answer.intent == intent and answer.goal is None
+            assert answer.reason.startswith(intent)
+    said = repr("don't go to the fridge")
+    probe.instruction_pub.publish(String(data="don't go to the fridge"))
+    assert graph.wait_for(lambda: grounder_said(probe, namespace, 'grounding', said))
+    [status] = grounder_said(probe, namespace, 'grounding', said)
+    assert {v.key: v.value for v in status.values}['intent'] == 'negation'
+    assert len(probe.goals) == goals

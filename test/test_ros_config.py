@@ -358,6 +358,9 @@ ROSDEP_KEYS = {
     'torch': 'python3-torch',
     'gymnasium': 'python3-gymnasium-pip',
     'rosbags': 'python3-rosbags-pip',
+    'rapidfuzz': 'python3-rapidfuzz',
+    'text_to_num': 'python3-text2num-pip',
+    'symspellpy': 'python3-symspellpy-pip',
 }
 
 

@@ -111,6 +111,10 @@ def round_trip_latency(
             f'checkpoint:={checkpoint}',
             '-p',
             'entity_table:=entities_puddleworld.yaml',  # PuddleWorld maps (the default: office)
+            '-p',
+            # every instruction is timed to its goal_pose: none may be declined as unsure (an
+            # uncalibrated checkpoint's confidence means little)
+            'min_confidence:=0.0',
             *(a for p in parameters for a in ('-p', p)),
         ],
         stdout=subprocess.DEVNULL,
