@@ -100,6 +100,8 @@ class Grounding:
     intent: str = 'go'
     steps: list['Grounding'] = field(default_factory=list)
     answer: str | None = None
+    # the goal stands beside a solid landmark it approaches (`referent`), not on a cell named
+    beside: bool = False
 
     @property
     def reason_code(self) -> str | None:
@@ -364,6 +366,7 @@ class Grounder:
             landmarks=self.named(list(mentions)),
             referent=referent,
             model_instruction=model_text,
+            beside=approach is not None and approach.goal is not None,
         )
 
     def model_view(self, grid: np.ndarray, ref: Reference):

@@ -217,3 +217,12 @@ def test_each_intent_as_the_node_sends_it(grounder):
     reply = response(GroundInstruction.Response(), negation, p)
     assert not reply.success and reply.intent == 'negation'
     assert grounding_report(negation)[0] == DiagnosticStatus.WARN
+
+
+def test_auto_heading_faces_a_landmark_the_goal_stands_beside():
+    """auto: the goal beside the fridge faces it; any other goal keeps the identity."""
+    east = goal_yaw('auto', (1, 1), (1, 2), None, Info, beside=True)
+    assert east == pytest.approx(0.0)
+    north = goal_yaw('auto', (1, 1), (0, 1), None, Info, beside=True)
+    assert north == pytest.approx(math.pi / 2)
+    assert goal_yaw('auto', (1, 1), (0, 1), None, Info) is None

@@ -174,6 +174,22 @@ def test_mapper_and_grounder_with_no_parameters_give_goals(robot):
         assert graph.wait_for(lambda: grounder_said(probe, namespace, 'grounding', repr(text)))
         [status] = grounder_said(probe, namespace, 'grounding', repr(text))
         assert {v.key: v.value for v in status.values}['intent'] == 'go'
+    # a solid landmark is approached: a free cell beside its footprint, facing it
+    for text, kind in (('go to the fridge', office.FRIDGE), ('go next to the desk', office.DESK)):
+        before = len(probe.goals)
+        probe.instruction_pub.publish(String(data=text))
+        assert graph.wait_for(lambda: len(probe.goals) > before), grounder_said(
+            probe, namespace, 'grounding'
+        )[-1:]
+        pose = probe.goals[-1].pose
+        footprint = [office.centre_of(tuple(c)) for c in np.argwhere(office.EXPECTED == kind)]
+        here = (pose.position.x, pose.position.y)
+        x, y = min(footprint, key=lambda f: math.dist(f, here))
+        assert 0 < math.hypot(x - pose.position.x, y - pose.position.y) <= 0.6, text
+        q = pose.orientation
+        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        toward = math.atan2(y - pose.position.y, x - pose.position.x)
+        assert abs(math.remainder(yaw - toward, 2 * math.pi)) <= 0.35, (text, yaw, toward)
 
 
 def test_200_concurrent_service_calls_are_each_answered_or_refused(robot):

@@ -27,7 +27,7 @@ from typing import Callable
 
 from .map_geometry import cell_centre
 
-GOAL_HEADINGS = ('identity', 'face_referent', 'keep')
+GOAL_HEADINGS = ('auto', 'identity', 'face_referent', 'keep')
 GOAL_STAMPS = ('map', 'now')
 
 
@@ -88,18 +88,22 @@ def goal_yaw(
     referent: tuple[int, int] | None,
     robot_yaw: float | None,
     info,
+    beside: bool = False,
 ) -> float | None:
     """
     Return the goal's yaw in the map frame for `heading`; None is the identity.
 
     face_referent: from the goal cell's centre toward the referent's (None when there is none or
-    it is the goal cell); keep: the robot's yaw (None before one is known). `info` is the map's
-    MapMetaData (or anything with its fields).
+    it is the goal cell); keep: the robot's yaw (None before one is known); auto: face_referent
+    for a goal `beside` a solid landmark it approaches ("go to the fridge"), else identity.
+    `info` is the map's MapMetaData (or anything with its fields).
     """
     if heading not in GOAL_HEADINGS:
         raise ValueError(
             f'goal_heading must be one of {", ".join(GOAL_HEADINGS)}, got {heading!r}'
         )
+    if heading == 'auto':
+        heading = 'face_referent' if beside else 'identity'
     if heading == 'keep':
         return robot_yaw if robot_yaw is not None and math.isfinite(robot_yaw) else None
     if heading == 'identity' or referent is None or tuple(referent) == tuple(cell):

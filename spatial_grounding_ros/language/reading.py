@@ -304,7 +304,9 @@ class Reader:
         if positive is not words:
             words, mentions = positive, self.lexicon.mentions(positive)
         motion = find_phrase(content[:2], MOTIONS)
-        if motion:  # "follow the wall", "turn towards the door": a motion, not a place
+        rest = set(content[2:])
+        if motion and not rest & (GO_VERBS | set(DIRECTIONS) | set(NUMBERS) | QUALIFIERS):
+            # "follow the wall", "turn towards the door": a motion, not a place
             return Command(text, 'unsupported', (),
                            f'unsupported: "{motion[0][1]}" asks for a motion, not a place', notes)
         if not mentions:

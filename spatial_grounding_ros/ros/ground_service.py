@@ -52,12 +52,14 @@ class Poser:
     heading: str
     robot_yaw: float | None = None
 
-    def pose(self, cell, referent=None) -> PoseStamped:
-        yaw = goal_yaw(self.heading, cell, referent, self.robot_yaw, self.info)
+    def pose(self, cell, referent=None, beside: bool = False) -> PoseStamped:
+        yaw = goal_yaw(self.heading, cell, referent, self.robot_yaw, self.info, beside)
         return convert.cell_to_pose(cell, self.info, self.header.frame_id, self.header.stamp, yaw)
 
     def goal(self, result: Grounding) -> PoseStamped | None:
-        return None if result.goal is None else self.pose(result.goal, result.referent)
+        if result.goal is None:
+            return None
+        return self.pose(result.goal, result.referent, getattr(result, 'beside', False))
 
     def referent(self, result: Grounding) -> PoseStamped:
         """Return the referent's cell centre (identity heading); frame_id '' when there is none."""

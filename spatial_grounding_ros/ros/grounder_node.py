@@ -64,6 +64,7 @@ from .qos import BURST, LATCHED
 from ..core import topics
 from ..core.entities import EntityTable
 from ..core.instruction_hold import Dropped, goal_stamp, InstructionHold
+from ..core.map_geometry import point_to_cell
 from ..grounder import Grounder, Grounding
 from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
@@ -87,6 +88,8 @@ class GrounderNode(LifecycleNode):
         self.topics = []  # publishers, subscriptions and the service of configure
         self.expiry_timer = None
         self.robot_yaw: float | None = None  # of the latest robot_pose (goal_heading: keep)
+        # the latest robot_pose's (x, y): an approach goal is the side the robot reaches first
+        self.robot_xy: tuple[float, float] | None = None
         self.model_lock = threading.Lock()  # one grounding at a time: torch, the text cache
         self.state_lock = threading.RLock()  # the hold and the map, shared by the callbacks
         self.requests = 0  # ground_instruction requests in flight
@@ -242,7 +245,7 @@ class GrounderNode(LifecycleNode):
             destroy_entities(self, self.topics)
             self.topics = []
             self.grounder = None
-            self.robot_yaw = None
+            self.robot_yaw = self.robot_xy = None
             self.release_input()
 
     def destroy_node(self) -> None:
@@ -361,6 +364,9 @@ class GrounderNode(LifecycleNode):
         yaw = convert.quaternion_yaw(msg.pose.orientation)
         if np.isfinite(yaw):
             self.robot_yaw = yaw
+        x, y = msg.pose.position.x, msg.pose.position.y
+        if np.isfinite(x) and np.isfinite(y):
+            self.robot_xy = (x, y)
 
     # --- grounding
 
@@ -370,7 +376,10 @@ class GrounderNode(LifecycleNode):
             if self.grounder is None:
                 raise ValueError('the node is not configured')
             self.grounder.min_confidence = self.param('min_confidence')  # settable at run time
-            return self.grounder.ground(grid, text, cell_size=map_msg.info.resolution)
+            robot = None if self.robot_xy is None else point_to_cell(*self.robot_xy, map_msg.info)
+            return self.grounder.ground(
+                grid, text, cell_size=map_msg.info.resolution, robot_cell=robot
+            )
 
     def poser(self, map_msg: OccupancyGrid) -> Poser:
         # the map's stamp (goal_stamp: map): the goal is that map's cell, where the map was then

@@ -84,9 +84,11 @@ PARAMETERS = (
     ),
     Param(
         'goal_heading',
-        'identity',
-        "goal orientation: identity (the map frame's +x), face_referent (toward the named "
-        "landmark's cell nearest the goal), keep (the yaw of the latest robot_pose)",
+        'auto',
+        'goal orientation: auto (face_referent for a goal beside a solid landmark it '
+        'approaches, "go to the fridge"; identity otherwise), identity (the map frame\'s +x), '
+        "face_referent (toward the named landmark's cell nearest the goal), keep (the yaw of "
+        'the latest robot_pose)',
         choices=convert.GOAL_HEADINGS,
     ),
     Param(
