@@ -178,12 +178,15 @@ def test_goal_orientation_is_the_identity_on_a_rotated_origin(nodes, reference, 
     """
     Check docs/ros.md: goal_heading `identity` faces the map frame's +x.
 
+    The default, `auto`, is the identity here: no goal on a PuddleWorld map stands beside a
+    solid landmark.
+
     "(also when the grid's origin is rotated): an instruction names a place, not a heading".
     The goal is where the rotated grid puts the cell (good_request checks the position against
     the API), and its orientation is exactly the identity quaternion, not the origin's.
     """
     graph, grounder, probe = nodes
-    assert grounder.get_parameter('goal_heading').value == 'identity'  # the default
+    assert grounder.get_parameter('goal_heading').value == 'auto'  # the default
     info = convert.map_info((10, 10), resolution=0.5, origin=(2.0, -1.0))
     o = info.origin.orientation
     o.x, o.y, o.z, o.w = orientation
