@@ -72,6 +72,7 @@ from .wording import (
     cell_before_count,
     cell_for_fixed_target,
     count_first,
+    drop_unknown,
     OPENING_VERBS,
     side_of_it,
     tidy,
@@ -382,7 +383,8 @@ class Reader:
         slotted = [w for w in slotted if w not in FILLERS] or slotted
         canon = canonical(slotted, [i for i, w in enumerate(slotted) if is_slot(w)])
         # the words the network learned and the slots: an unknown word cannot move the goal
-        kept = tidy([w for w in canon if w in self.vocab or is_slot(w) or w.isdigit()] or canon)
+        slots_and_counts = {w for w in canon if is_slot(w) or w.isdigit()}
+        kept = tidy(drop_unknown(canon, self.vocab | slots_and_counts))
         kept = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_for_fixed_target(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_before_count(kept)

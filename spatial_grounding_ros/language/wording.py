@@ -20,12 +20,10 @@ data/paraphrase.py draws wordings from the same table to measure it.
 
 from __future__ import annotations
 
-from dataclasses import replace
 import re
 from typing import Iterable
 
 from .checks import DIRECTIONS, NUMBERS, offset_before
-from .lexicon import Mention
 from .units import METRIC_UNIT
 from ..core.text import tokenize
 
@@ -142,19 +140,6 @@ def canonical(words: list[str], keep: Iterable[int] = ()) -> list[str]:
     dropped; a verb is the model's only where it opens the request (after any filler).
     """
     return _canonical(words, set(keep))[0]
-
-
-def reworded(words: list[str], mentions: list[Mention]) -> tuple[list[str], list[Mention]]:
-    """
-    Return the words in the model's wording and the landmarks named, moved to match.
-
-    What reads an instruction's offsets and sides (language/checks.py, the footprint anchors)
-    reads this: "go over to the couch" names no offset, "two right above" is "two above".
-    """
-    keep = {i for m in mentions for i in range(m.start, m.end)}
-    out, source = _canonical(words, keep)
-    where = {i: at for at, i in enumerate(source) if i is not None}
-    return out, [replace(m, start=where[m.start], end=where[m.end - 1] + 1) for m in mentions]
 
 
 def _canonical(words: list[str], keep: set[int]) -> tuple[list[str], list[int | None]]:
