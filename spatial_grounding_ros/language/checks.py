@@ -125,13 +125,22 @@ def offset_before(words: list[str], start: int, end: int) -> tuple[int, int]:
     if said and words[said[-1]] in ADJECTIVES:
         end = said[-1]
     dr = dc = 0
-    count = None
+    count, pair = None, None
     for w in words[start:end]:
         if w in NUMBERS:
-            count = NUMBERS[w]
+            count, pair = NUMBERS[w], None
         elif w in DIRECTIONS:
+            step = DIRECTIONS[w]
+            if pair is not None and 0 in pair and (pair[0] == 0) != (step[0] == 0):
+                # "two cells north east": the count goes with both words of a diagonal
+                n = pair_count
+                dr, dc, pair = dr + n * step[0], dc + n * step[1], None
+                continue
             n = 1 if count is None else count
-            dr, dc, count = dr + n * DIRECTIONS[w][0], dc + n * DIRECTIONS[w][1], None
+            dr, dc, count = dr + n * step[0], dc + n * step[1], None
+            pair, pair_count = step, n
+        else:
+            pair = None
     return dr, dc
 
 

@@ -50,6 +50,7 @@ from .checks import (
 )
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
+from .places import FAR_WORDS, parse, Place, PLACE_WORDS
 from .units import digits, in_cells, LEARNED_COUNT, offsets
 from .vocabulary import (
     CORRECTIONS,
@@ -119,6 +120,7 @@ class Reference:
     reason: str | None = None  # why the words alone leave no cell to go to
     unknown_words: tuple[str, ...] = ()  # words read as none (left out)
     spelled: tuple[tuple[str, str], ...] = ()  # (word said, word read) for each misspelling
+    place: Place | None = None  # the typed place (places.py), when its grammar reads every word
 
     def model_words(self, names: dict[int, str | None]) -> tuple[list[str], tuple[int, int]]:
         """
@@ -169,7 +171,7 @@ class Reader:
         self.classes = (
             frozenset(DIRECTIONS) | frozenset(NUMBERS) | QUALIFIERS | CLAUSES | MAP_WORDS
             | COMMON_WORDS | wording_words() | STOP_WORDS | GO_VERBS | FILLERS | DEICTIC
-            | PATH_WORDS | frozenset(LENGTH_UNITS) | frozenset(OPENING_VERBS)
+            | PATH_WORDS | frozenset(LENGTH_UNITS) | frozenset(OPENING_VERBS) | PLACE_WORDS
             | {w for p in (*NEGATIONS, *CORRECTIONS, *SEQUENCE_MARKS, *UNSUPPORTED,
                            *QUESTION_OPENERS, *REQUEST_OPENERS) for w in tokenize(p)}
         )  # fmt: skip
@@ -378,9 +380,13 @@ class Reader:
             if w not in self.known and not any(m.start <= i < m.end for m in mentions)
             and not w.isdigit()
         ]  # fmt: skip
-        reason = self.reason_of(words, mentions, unknown)
         slotted, slots = slot(words, mentions)
         slotted = [w for w in slotted if w not in FILLERS] or slotted
+        names = self.lexicon.table.names
+        place = None if unknown else parse(
+            slotted, {f'{SLOT}{k}': names[m.kind] for k, m in enumerate(slots)}
+        )
+        reason = self.reason_of(words, mentions, unknown, place)
         canon = canonical(slotted, [i for i, w in enumerate(slotted) if is_slot(w)])
         # the words the network learned and the slots: an unknown word cannot move the goal
         slots_and_counts = {w for w in canon if is_slot(w) or w.isdigit()}
@@ -388,7 +394,9 @@ class Reader:
         kept = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_for_fixed_target(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_before_count(kept)
-        return unslot(said, kept, slots, reason, tuple(w for _, w in unknown), tuple(spelled))
+        return unslot(
+            said, kept, slots, reason, tuple(w for _, w in unknown), tuple(spelled), place
+        )
 
     def spelled(self, words: list[str]) -> tuple[list[str], list[tuple[str, str]]]:
         """Return the words with each misspelt relation word read as the word meant."""
@@ -422,9 +430,11 @@ class Reader:
             i += 1
         return out
 
-    def reason_of(self, words, mentions, unknown) -> str | None:
+    def reason_of(self, words, mentions, unknown, place=None) -> str | None:
         """Return why the words alone leave no cell to go to, or None."""
         text = f' {" ".join(words)} '
+        if place is not None:  # the place's grammar read every word: farthest is composed
+            text = f' {" ".join(w for w in text.split() if w not in FAR_WORDS)} '
         sideless = next((w for w in SIDELESS if f' {w} ' in text), None)
         if mentions and sideless:
             return f'ambiguous: "{sideless}" names no side on a map'
@@ -476,7 +486,7 @@ def slot(words: list[str], mentions: list[Mention]) -> tuple[list[str], list[Men
     return out, slots
 
 
-def unslot(said, words, slots, reason, unknown, spelled) -> Reference:
+def unslot(said, words, slots, reason, unknown, spelled, place=None) -> Reference:
     """Return the Reference of slotted words: each slot the mention's last word."""
     out, mentions = [], []
     for w in words:
@@ -486,7 +496,7 @@ def unslot(said, words, slots, reason, unknown, spelled) -> Reference:
             out.append(m.words[-1])
         else:
             out.append(w)
-    return Reference(said, tuple(out), tuple(mentions), reason, unknown, spelled)
+    return Reference(said, tuple(out), tuple(mentions), reason, unknown, spelled, place)
 
 
 __all__ = ['Command', 'INTENTS', 'LEARNED_COUNT', 'Reader', 'Reference']
