@@ -29,9 +29,11 @@ from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQU
 from .core.footprints import footprints, reduce_footprints
 from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
+from .language import compose
 from .language.approach import approach_for
 from .language.checks import map_reason, named_sides, said
 from .language.lexicon import Lexicon, Mention, Translation
+from .language.places import composed, Landmark, learned_part, Place, surface
 from .language.reading import Command, Reader, Reference
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
@@ -64,6 +66,7 @@ REASONS = (
     'low-confidence',
     'unreadable',
     'negation',
+    'unknown-region',
 )
 
 
@@ -128,6 +131,34 @@ def shifted(values: np.ndarray, offset: tuple[int, int]) -> np.ndarray:
             max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)
         ]
     return out
+
+
+def inside(grid: np.ndarray, cell: tuple[int, int]) -> bool:
+    """Say whether a (row, col) is a cell of the grid."""
+    return 0 <= cell[0] < grid.shape[0] and 0 <= cell[1] < grid.shape[1]
+
+
+def compose_pick(landmark: Landmark) -> bool:
+    """Say whether picking the landmark needs the map's landmarks (an ordinal, a farthest)."""
+    return landmark.pick in ('ordinal', 'farthest')
+
+
+def anchor_cell(cells: np.ndarray, offset: tuple[int, int]) -> tuple[int, int]:
+    """Return the landmark's cell an offset is counted from: its edge on the offset's side."""
+    from .core.footprints import anchor, side_of
+
+    return anchor(cells, side_of(offset))
+
+
+def renamed(place: Place, names: dict[str, str]) -> Place:
+    """Return a place with each landmark named by `names` (the table's name -> the network's)."""
+
+    def one(lm):
+        return None if lm is None else replace(lm, name=names.get(lm.name, lm.name),
+                                              anchor=one(lm.anchor))
+
+    return replace(place, landmark=one(place.landmark), other=one(place.other),
+                   on=None if place.on is None else names.get(place.on, place.on))
 
 
 def imaged(grid: np.ndarray, images) -> torch.Tensor:
@@ -326,13 +357,12 @@ class Grounder:
         self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
     ) -> Grounding:
         """Return the grounding of one place: the network's value map, judged and checked."""
+        if ref.place is not None and composed(ref.place):
+            return self.ground_composed(grid, instruction, ref, robot_cell)
         model_grid, names, mentions = self.model_view(grid, ref)
-        words, extra = ref.model_words(names)
-        model_text = ' '.join(words)
-        images = IMAGES if model_grid.size <= self.mirror_average_cells else IMAGES[:1]
-        code = self.text_code(model_text, images)
-        values, aux = self.model.ground(imaged(model_grid, images), code, True)
-        values = shifted(averaged(values.numpy(), images), extra)
+        words, extra = ref.model_words(names)  # what the network learned, as it was said
+        values, aux = self.network(model_grid, words)
+        values = shifted(values, extra)
         best, confidence, alternatives = self.judge(values)
         reason = ref.reason or map_reason(self.entities, grid, list(ref.words), list(mentions))
         # the approach step: sent to a solid landmark, the robot stops beside it
@@ -346,15 +376,26 @@ class Grounder:
             # the robot stops beside the landmark, whichever side the network favoured: the
             # chance that it is the place meant is the mass on the landmark and around it
             confidence = self.around(values, grid, referent)
-        if reason is None and int(grid[goal]) in self.entities.never_goal:
+        return self.grounding(
+            grid, instruction, ref, values, aux, words, goal, best, confidence, reason, alternatives,
+            referent, approach is not None and approach.goal is not None,
+        )
+
+    def grounding(
+        self, grid, instruction, ref, values, aux, words, goal, best, confidence, reason, alternatives,
+        referent, beside,
+    ) -> Grounding:
+        """Return a Grounding of one place, judged: on an obstacle, or too unsure, declined."""
+        if reason is None and goal is not None and int(grid[goal]) in self.entities.never_goal:
             reason = 'goal-on-obstacle'
         if reason is None and confidence < self.min_confidence:
             reason = f'low-confidence: {confidence:.2f} < {self.min_confidence:.2f}'
-        attention = aux['attention']
+        attention = None if aux is None else aux['attention']
+        relation = np.zeros_like(values) if aux is None else aux['relation_map'][0].numpy()
         return Grounding(
             instruction,
             values,
-            aux['relation_map'][0].numpy(),
+            relation,
             None if reason else goal,
             words,
             None if attention is None else attention[0].tolist(),
@@ -363,11 +404,174 @@ class Grounder:
             confidence=confidence,
             reason=reason,
             alternatives=alternatives,
-            landmarks=self.named(list(mentions)),
+            landmarks=self.named(list(ref.mentions)),
             referent=referent,
-            model_instruction=model_text,
-            beside=approach is not None and approach.goal is not None,
+            model_instruction=' '.join(words),
+            beside=beside,
         )
+
+    def network_words(self, ref: Reference, names: dict, place: Place | None):
+        """
+        Return the network's words for a part of a composed place, and the offset to shift by.
+
+        The part is said in the words the network learned it from (places.surface, style 0,
+        the landmarks in its own names); the part of an offset past what it learned shifts its
+        value map (places.learned_part).
+        """
+        table_names = {self.entities.names[k]: v for k, v in names.items()}
+        if place is None or None in table_names.values():
+            return ref.model_words(names)
+        # an object named on the goal cell ("reach rock between ...") says no more than "cell"
+        # of a place its relation fixes (wording.cell_for_fixed_target)
+        rest, place = (0, 0), replace(place, on=None)
+        if place.relation == 'landmark':
+            part = learned_part(place.offset, place.landmark)
+            rest = (place.offset[0] - part[0], place.offset[1] - part[1])
+            place = replace(place, offset=part)
+        return surface(renamed(place, table_names)).split(), rest
+
+    def network(self, model_grid: np.ndarray, words: list[str]):
+        """Return the network's value map for its words (the mean over the map's images)."""
+        images = IMAGES if model_grid.size <= self.mirror_average_cells else IMAGES[:1]
+        code = self.text_code(' '.join(words), images)
+        values, aux = self.model.ground(imaged(model_grid, images), code, True)
+        return averaged(values.numpy(), images), aux
+
+    def ground_composed(
+        self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
+    ) -> Grounding:
+        """
+        Return the grounding of a place composed from the network's groundings of its landmarks.
+
+        An offset past the learned ones shifts the network's value map (network_words); between
+        is the midpoint of its two landmarks; an ordinal or a farthest picks among the map's
+        landmarks of the kind (language/compose.py); a corner or a side is the map's own.
+        """
+        place = ref.place
+        missing = self.missing(grid, ref)
+        if missing is not None:
+            return self.declined(grid, instruction, ref, missing)
+        if place.relation in ('corner', 'edge'):
+            cells, reason = compose.map_place(self.entities, grid, place)
+            return self.placed(grid, instruction, ref, cells, 1.0, reason, [], None, robot_cell)
+        model_grid, names, _ = self.model_view(grid, ref)
+        if place.relation == 'between':
+            (a, pa, wa, ra), (b, pb, wb, rb) = (
+                self.locate(grid, model_grid, names, ref, lm) for lm in (place.landmark, place.other)
+            )
+            reason = ra or rb
+            cell = None
+            if reason is None:
+                cell, reason = compose.midpoint(a, b, (place.landmark.name, place.other.name))
+            cells = [] if cell is None else [(cell, 1.0)]
+            return self.placed(grid, instruction, ref, cells, pa * pb, reason, wa + wb, None,
+                               robot_cell)
+        landmark, offset = place.landmark, place.offset
+        if not compose_pick(landmark):  # the network grounds the landmark; an offset shifts
+            words, rest = self.network_words(ref, names, place)
+            values, aux = self.network(model_grid, words)
+            first, _, _ = self.judge(values)
+            target = (first[0] + rest[0], first[1] + rest[1])
+            values = shifted(values, rest)
+            best, confidence, alternatives = self.judge(values)
+            reason = None if inside(grid, target) else 'off-map'
+            referent = nearest_cell(grid, [m.kind for m in ref.mentions], best)
+            return self.grounding(grid, instruction, ref, values, aux, words, best, best, confidence,
+                                  reason, alternatives, referent, False)
+        cells, confidence, words, reason = self.locate(grid, model_grid, names, ref, landmark)
+        if reason is not None:
+            return self.placed(grid, instruction, ref, [], confidence, reason, words, None,
+                               robot_cell)
+        if offset == (0, 0):  # the landmark itself: beside it, if it is solid
+            cell = tuple(int(x) for x in cells[np.abs(cells - compose.centre(cells)).sum(1).argmin()])
+            return self.placed(grid, instruction, ref, [(cell, 1.0)], confidence, None, words,
+                               cell, robot_cell)
+        base = anchor_cell(cells, offset)
+        goal = (base[0] + offset[0], base[1] + offset[1])
+        reason = None if inside(grid, goal) else 'off-map'
+        return self.placed(grid, instruction, ref, [(goal, 1.0)] if reason is None else [],
+                           confidence, reason, words, None, robot_cell)
+
+    def missing(self, grid: np.ndarray, ref: Reference) -> str | None:
+        """Return why a composed place cannot be grounded before any network: a landmark gone."""
+        if ref.reason is not None:
+            return ref.reason
+        for m in ref.mentions:
+            if m.kind not in self.entities.obstacles and not (grid == m.kind).any():
+                return f'referent-missing: {said(self.entities, m.kind)}'
+        return None
+
+    def locate(self, grid, model_grid, names, ref: Reference, landmark: Landmark):
+        """
+        Return (the landmark's cells, confidence, network words, reason) for one landmark.
+
+        The network grounds a landmark said as it learned it ("reach westernmost rock",
+        "reach rock closest to star"); an ordinal or a farthest picks among the kind's
+        landmarks on the map, the farthest from its anchor as the network grounds that.
+        """
+        kind = self.kind_of(ref, landmark.name)
+        found = compose.instances(grid, kind, self.entities.has_footprints)
+        name = landmark.name.replace('_', ' ')
+        if landmark.pick == 'ordinal':
+            i, reason = compose.ordinal(found, landmark, name)
+            return (None if i is None else found[i]), 1.0, [], reason
+        if landmark.pick == 'farthest':
+            cells, confidence, words, reason = self.locate(
+                grid, model_grid, names, ref, landmark.anchor
+            )
+            if reason is not None:
+                return None, confidence, words, reason
+            anchor = landmark.anchor.name.replace('_', ' ')
+            i, reason = compose.farthest(found, compose.centre(cells), name, anchor)
+            return (None if i is None else found[i]), confidence, words, reason
+        if landmark.pick is None and len(found) > 1:
+            return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
+        words, _ = self.network_words(ref, names, Place('landmark', landmark))
+        values, _ = self.network(model_grid, words)
+        best, confidence, _ = self.judge(values)
+        i = int(np.argmin([((c - np.asarray(best)) ** 2).sum(1).min() for c in found]))
+        return found[i], confidence, words, None
+
+    def kind_of(self, ref: Reference, name: str) -> int:
+        """Return the kind of the table a landmark's name is (one the reference mentions)."""
+        return next(m.kind for m in ref.mentions if self.entities.names[m.kind] == name)
+
+    def placed(
+        self, grid, instruction, ref, cells, confidence, reason, words, landmark_cell, robot_cell
+    ) -> Grounding:
+        """
+        Return the grounding of a composed place's cells ([(cell, share)]: its value map).
+
+        `landmark_cell`: the place is this landmark's own cell; a solid one is approached.
+        """
+        p = np.full(grid.shape, 1e-9)
+        for cell, share in cells:
+            p[cell] = share * max(confidence, 1e-6)
+        rest = 1 - p[[c for c, _ in cells]].sum() if cells else 1.0
+        p[p <= 1e-9] = max(rest, 0) / max((p <= 1e-9).sum(), 1) + 1e-12
+        values = (self.temperature * np.log(p / p.sum())).astype(np.float32)
+        best, p_best, alternatives = self.judge(values)
+        goal, referent, beside = (cells[0][0] if cells else best), None, False
+        if landmark_cell is not None:
+            referent = landmark_cell
+            kind = int(grid[landmark_cell])
+            approach = approach_for(
+                self.entities, grid, [self.entities.names[kind]],
+                [Mention(kind, 0, 1, (self.entities.names[kind],))], landmark_cell, robot_cell,
+            )
+            if approach is not None:
+                goal, referent = approach.goal, approach.referent
+                reason, beside = reason or approach.reason, approach.goal is not None
+        elif ref.mentions and cells:
+            referent = nearest_cell(grid, [m.kind for m in ref.mentions], goal)
+        return self.grounding(
+            grid, instruction, ref, values, None, words, None if reason else goal, best,
+            p_best if cells else 0.0, reason, alternatives, referent, beside,
+        )
+
+    def declined(self, grid, instruction, ref, reason) -> Grounding:
+        """Return a composed place's grounding declined before any network ran."""
+        return self.placed(grid, instruction, ref, [], 0.0, reason, [], None, None)
 
     def model_view(self, grid: np.ndarray, ref: Reference):
         """

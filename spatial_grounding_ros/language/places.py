@@ -129,20 +129,35 @@ class Place:
     on: str | None = None
 
 
-def learned_offset(offset: tuple[int, int]) -> bool:
-    """Say whether the network learned an offset (generator.FAMILY_OFFSETS: Janner's and ours)."""
+def learned_offset(offset: tuple[int, int], landmark: Landmark | None = None) -> bool:
+    """
+    Say whether the network learned an offset from a landmark said this way.
+
+    From a landmark of its own: Janner's offsets and ours (generator.FAMILY_OFFSETS); from an
+    extreme: one step along an axis (Janner's global phrasing); from a closest: none.
+    """
     dr, dc = map(abs, offset)
+    pick = None if landmark is None else landmark.pick
+    if pick == 'extreme':
+        return dr + dc <= 1
+    if pick is not None:
+        return offset == (0, 0)
     if 0 in (dr, dc):
         return max(dr, dc) <= LEARNED_STRAIGHT
     return max(dr, dc) <= LEARNED_TWO_AXES and (max(dr, dc) == 2 or (dr, dc) == (1, 1))
 
 
-def learned_part(offset: tuple[int, int]) -> tuple[int, int]:
+def learned_part(offset: tuple[int, int], landmark: Landmark | None = None) -> tuple[int, int]:
     """Return the part of an offset the network reads; the rest shifts its value map."""
     dr, dc = offset
     limit = LEARNED_STRAIGHT if 0 in (dr, dc) else LEARNED_TWO_AXES
-    part = (max(-limit, min(limit, dr)), max(-limit, min(limit, dc)))
-    return part if learned_offset(part) else (max(-1, min(1, dr)), max(-1, min(1, dc)))
+    for part in (
+        (max(-limit, min(limit, dr)), max(-limit, min(limit, dc))),
+        (max(-1, min(1, dr)), 0) if dr else (0, max(-1, min(1, dc))),
+    ):
+        if learned_offset(part, landmark):
+            return part
+    return 0, 0
 
 
 def composed(place: Place) -> bool:
@@ -151,7 +166,7 @@ def composed(place: Place) -> bool:
         return True
     if place.relation == 'row-col':
         return False
-    return not learned_offset(place.offset) or composed_landmark(place.landmark)
+    return not learned_offset(place.offset, place.landmark) or composed_landmark(place.landmark)
 
 
 def composed_landmark(landmark: Landmark | None) -> bool:
@@ -285,10 +300,11 @@ def surface(place: Place, style: int = 0) -> str:
         return [f'go halfway between {a} and {b}', f'go to the midpoint between {a} and {b}',
                 f'the cell midway between {a} and {b}'][(style - 1) % 3]
     if place.relation == 'row-col':
-        vertical = janner_offset(place.offset)
-        horizontal = janner_offset(place.other_offset)
+        dr, dc = place.offset[0], place.other_offset[1]
+        vertical = f'{_NUMBER[abs(dr)]} {"above" if dr < 0 else "below"}'
+        horizontal = f'{_NUMBER[abs(dc)]} to the {"left" if dc < 0 else "right"} of'
         return (f'reach {target} {vertical} {landmark_words(place.landmark)} and '
-                f'{horizontal} of {landmark_words(place.other)}')
+                f'{horizontal} {landmark_words(place.other)}')
     landmark, offset = place.landmark, place.offset
     if style == 0 and not composed(place):  # Janner's
         if offset == (0, 0):
@@ -305,7 +321,9 @@ def surface(place: Place, style: int = 0) -> str:
 
 
 # -- parse: words back into a Place ---------------------------------------------------------
+INTENSIFIERS = frozenset('right just directly straight'.split())
 OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
+_VERB_TO = [[w, 'to'] for w in ('over', 'up', 'down', 'out', 'back', 'on')]
 _OPENING = frozenset('reach go to the a cell find get move head navigate drive please'.split())
 
 
@@ -333,7 +351,9 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
     kept = [w for w in words if w not in OFFSET_GLUE]
     while i < len(kept):
         w = kept[i]
-        if w in NUMBERS and count is None:
+        if w in INTENSIFIERS and kept[i + 1:i + 2] and DIRECTIONS.get(kept[i + 1], (0, 0))[0]:
+            pass  # "right above the sofa": straight above it
+        elif w in NUMBERS and count is None:
             count = NUMBERS[w]
         elif w in UNIT_WORDS:
             pass
@@ -341,9 +361,7 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
             step = DIRECTIONS[w]
             if i + 1 < len(kept) and kept[i + 1] in DIRECTIONS:  # "north east", "top left"
                 nxt = DIRECTIONS[kept[i + 1]]
-                if step[0] * nxt[0] == 0 and step[1] * nxt[1] == 0 and 0 not in (
-                    step[0] + nxt[0], step[1] + nxt[1]
-                ):
+                if step[1] == 0 and step[0] and nxt[0] == 0 and nxt[1]:  # as compass words go
                     step = (step[0] + nxt[0], step[1] + nxt[1])
                     i += 1
             n = 1 if count is None else count
@@ -401,7 +419,11 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     word's landmark (the table's name of its kind).
     """
     words = list(words)
-    while words and words[0] in _OPENING and not (words[0] == 'cell' and words[1:2] == ['with']):
+    while words and (words[0] in _OPENING or words[:2] in _VERB_TO) and not (
+        words[0] == 'cell' and words[1:2] == ['with']
+    ):
+        if words[:2] in _VERB_TO:  # "go over to the couch": the verb's, no direction
+            words = words[1:]
         if words[0] == 'to' and words[1:2] and words[1] in DIRECTIONS:  # "to top left of"
             break
         words = words[1:]
