@@ -70,7 +70,7 @@ def test_suite_worlds_are_the_family_and_size_asked_for():
     for family in FAMILIES:
         for grid, text, goal, _ in suite.suite_worlds(family, 9, 3, seed=0):
             assert grid.shape == (9, 9)
-            if family not in ('row-col', 'between'):
+            if family not in ('row-col', 'between-one'):
                 assert (text, goal) in family_goals(grid, family)
 
 
@@ -80,7 +80,7 @@ def test_suite_json_cli_prints_one_object():
     result = json.loads(r.stdout)
     assert {'hit', 'md', 'n', 'families'} <= set(result)
     assert set(result['families']) == set(FAMILIES)
-    assert result['families']['between']['6']['n'] == 2
+    assert result['families']['between-one']['6']['n'] == 2
 
 
 @pytest.mark.parametrize(
