@@ -12,8 +12,9 @@ Does a model send the robot to the cell a clear instruction names?
 Generated worlds at each size, every relation family of the generator (Janner et al.'s
 synthetic grammar; with `--families`, also the relations the network did not learn,
 RELATION_FAMILIES, the 'relations' group) in equal numbers; per family and size, HIT (the
-share of maps whose predicted argmax is the named cell) and MD (Manhattan distance to it). Each map is grounded
-alone through Grounder.ground, the node's own path, so the rates are the node's. Only the goal
+share of maps whose predicted argmax is the named cell) and MD (Manhattan distance to it).
+Each map is grounded alone through Grounder.ground, the node's own path, so the rates are the
+node's. Only the goal
 cell matters here, so no value iteration is run: the suite is cheap at 64x64.
 
     spatial-grounding suite --checkpoint pw_t-rnet-attn --sizes 10 32 64 --n 100 --json
