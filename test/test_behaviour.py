@@ -20,10 +20,10 @@ from spatial_grounding_ros.data.generator import (
     FAMILIES,
     FAMILY_OFFSETS,
     LOCAL_FAMILIES,
-    local_phrase,
     sample,
 )
 from spatial_grounding_ros.grounder import Grounder
+from spatial_grounding_ros.language.places import Landmark, Place, surface
 from spatial_grounding_ros.studies import suite
 import torch
 
@@ -92,7 +92,7 @@ def test_offsets_on_a_map_of_free_space_and_four_objects(grounder, size):
         for offset, family in OFFSETS:
             goal = (r + offset[0], c + offset[1])
             if 0 <= goal[0] < size and 0 <= goal[1] < size and grid[goal] == 0:
-                text = local_phrase(offset, name)
+                text = surface(Place('landmark', Landmark(name), offset))
                 if grounder.ground(grid, text).goal != goal:
                     wrong.append(text)
     assert not wrong, wrong
@@ -128,7 +128,7 @@ FLOOR = {
     'closest': 0.77,
     'extreme-offset': 0.95,
     'row-col': 0.85,
-    'between': 0.93,
+    'between-one': 0.93,
 }
 
 
@@ -153,7 +153,7 @@ FLOOR_64 = {
     'closest': 0.50,
     'extreme-offset': 0.75,
     'row-col': 0.75,
-    'between': 0.85,
+    'between-one': 0.85,
 }
 WORLDS_64 = 50
 

@@ -17,7 +17,7 @@ import sys
 
 import numpy as np
 import pytest
-from spatial_grounding_ros.data.generator import FAMILIES, family_goals
+from spatial_grounding_ros.data.generator import FAMILIES, family_goals, RELATION_FAMILIES
 from spatial_grounding_ros.grounder import Grounder
 from spatial_grounding_ros.studies import suite
 
@@ -70,8 +70,20 @@ def test_suite_worlds_are_the_family_and_size_asked_for():
     for family in FAMILIES:
         for grid, text, goal, _ in suite.suite_worlds(family, 9, 3, seed=0):
             assert grid.shape == (9, 9)
-            if family not in ('row-col', 'between'):
+            if family not in ('row-col', 'between-one'):
                 assert (text, goal) in family_goals(grid, family)
+
+
+def test_the_relation_families_are_one_group_and_leave_the_seeds_of_the_others():
+    assert suite.SUITE_FAMILIES[: len(FAMILIES)] == FAMILIES
+    result = suite.run_suite(
+        'pw-local_t-cnn', sizes=(10,), n=2, seed=1, families=RELATION_FAMILIES, progress=False
+    )
+    assert set(result['groups']) == {'relations'} and result['n'] == 2 * len(RELATION_FAMILIES)
+    for family in RELATION_FAMILIES:
+        assert result['families'][family]['10']['n'] == 2
+        for w in suite.suite_worlds(family, 10, 2, seed=1):
+            assert w.grid[w.goal] != 1, (family, w.instruction)  # never a puddle
 
 
 def test_suite_json_cli_prints_one_object():
@@ -80,7 +92,7 @@ def test_suite_json_cli_prints_one_object():
     result = json.loads(r.stdout)
     assert {'hit', 'md', 'n', 'families'} <= set(result)
     assert set(result['families']) == set(FAMILIES)
-    assert result['families']['between']['6']['n'] == 2
+    assert result['families']['between-one']['6']['n'] == 2
 
 
 @pytest.mark.parametrize(

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .generator import FAMILY_OFFSETS, GRASS, local_phrase, random_grid, sample
+from .generator import FAMILY_OFFSETS, GRASS, random_grid, sample
 from ..core.entities import (
     EntityTable,
     PUDDLEWORLD,
@@ -34,6 +34,7 @@ from ..core.entities import (
     PUDDLEWORLD_UNIQUE,
 )
 from ..language.lexicon import count_objects
+from ..language.places import Landmark, Place, surface
 
 # the reason each kind of case should be declined with
 REASONS = {
@@ -104,7 +105,7 @@ def off_map(rng: np.random.Generator, size: int):
     kind = PUDDLEWORLD.index(name)
     grid[grid == kind] = GRASS
     grid[r, c] = kind
-    return grid, local_phrase((dr, dc), name)
+    return grid, surface(Place('landmark', Landmark(name), (dr, dc)))
 
 
 def ambiguous(rng: np.random.Generator, size: int):
@@ -130,7 +131,7 @@ def ambiguous(rng: np.random.Generator, size: int):
             for r, c in zip(*np.nonzero(grid == kind))
             if 0 <= r + dr < size and 0 <= c + dc < size
         ]
-    return grid, local_phrase((dr, dc), name)
+    return grid, surface(Place('landmark', Landmark(name), (dr, dc)))
 
 
 def obstacle(rng: np.random.Generator, size: int):

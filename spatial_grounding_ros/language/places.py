@@ -230,6 +230,14 @@ def janner_offset(offset: tuple[int, int]) -> str:
     return f'{horizontal} and {vertical}'
 
 
+def row_col_words(offset: tuple[int, int]) -> str:
+    """Return Janner's words for a row-col part: a count even of one ('one above')."""
+    dr, dc = offset
+    if dr:
+        return f'{_NUMBER[abs(dr)]} {_VERTICAL_ADJ[dr // abs(dr)]}'
+    return f'{_NUMBER[abs(dc)]} to the {_PLAIN[(0, dc // abs(dc))]} of'
+
+
 def landmark_words(landmark: Landmark, style: int = 0) -> str:
     """Return a landmark's words: Janner's (style 0, no articles) or as people say it."""
     name = landmark.name
@@ -299,10 +307,9 @@ def surface(place: Place, style: int = 0) -> str:
         a, b = landmark_words(a, 1), landmark_words(b, 1)
         return [f'go halfway between {a} and {b}', f'go to the midpoint between {a} and {b}',
                 f'the cell midway between {a} and {b}'][(style - 1) % 3]
-    if place.relation == 'row-col':
-        dr, dc = place.offset[0], place.other_offset[1]
-        vertical = f'{_NUMBER[abs(dr)]} {"above" if dr < 0 else "below"}'
-        horizontal = f'{_NUMBER[abs(dc)]} to the {"left" if dc < 0 else "right"} of'
+    if place.relation == 'row-col':  # Janner's: "one above star and two to the left of heart"
+        vertical = row_col_words(place.offset)
+        horizontal = row_col_words(place.other_offset)
         return (f'reach {target} {vertical} {landmark_words(place.landmark)} and '
                 f'{horizontal} {landmark_words(place.other)}')
     landmark, offset = place.landmark, place.offset

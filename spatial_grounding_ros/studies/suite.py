@@ -10,9 +10,11 @@ The reference suite.
 Does a model send the robot to the cell a clear instruction names?
 
 Generated worlds at each size, every relation family of the generator (Janner et al.'s
-synthetic grammar) in equal numbers; per family and size, HIT (the share of maps whose
-predicted argmax is the named cell) and MD (Manhattan distance to it). Each map is grounded
-alone through Grounder.ground, the node's own path, so the rates are the node's. Only the goal
+synthetic grammar; with `--families`, also the relations the network did not learn,
+RELATION_FAMILIES, the 'relations' group) in equal numbers; per family and size, HIT (the
+share of maps whose predicted argmax is the named cell) and MD (Manhattan distance to it).
+Each map is grounded alone through Grounder.ground, the node's own path, so the rates are the
+node's. Only the goal
 cell matters here, so no value iteration is run: the suite is cheap at 64x64.
 
     spatial-grounding suite --checkpoint pw_t-rnet-attn --sizes 10 32 64 --n 100 --json
@@ -34,6 +36,7 @@ from ..data.generator import (
     FAMILIES,
     GLOBAL_FAMILIES,
     LOCAL_FAMILIES,
+    RELATION_FAMILIES,
     sample,
 )
 from ..data.paraphrase import in_metres, paraphrase
@@ -46,7 +49,11 @@ GROUPS = {
     'local': LOCAL_FAMILIES,
     'global': GLOBAL_FAMILIES,
     'compositional': COMPOSITIONAL_FAMILIES,
+    'relations': RELATION_FAMILIES,
 }
+# every family the suite can run; a family's seed is its index here, so that the relation
+# families (appended) leave the seeds of FAMILIES' worlds as they were
+SUITE_FAMILIES = FAMILIES + RELATION_FAMILIES
 DEFAULT_SIZES = (10, 32, 64)
 WORDINGS = ('plain', 'paraphrase', 'metric')
 
@@ -83,28 +90,28 @@ def suite_worlds(
     """
     if wording not in WORDINGS:
         raise ValueError(f'unknown wording {wording!r}; use one of {", ".join(WORDINGS)}')
-    rng = np.random.default_rng([seed, size, FAMILIES.index(family)])
+    rng = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family)])
     worlds = [sample(rng, family, size) for _ in range(n)]
     if table.names != PUDDLEWORLD.names or naming != 'name':
-        renamer = np.random.default_rng([seed, size, FAMILIES.index(family), 1])
+        renamer = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family), 1])
         worlds = [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
     if table.has_footprints:
         worlds = [(separate(g, t, goal, table), t, goal) for g, t, goal in worlds]
     if footprints:
         if not table.has_footprints:
             raise ValueError(f'the {table.domain} table draws every landmark over one cell')
-        drawer = np.random.default_rng([seed, size, FAMILIES.index(family), 3])
+        drawer = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family), 3])
         worlds = [
             (unexplored(grow(g, t, goal, table, drawer), goal, table, drawer), t, goal)
             for g, t, goal in worlds
         ]
     worlds = [SuiteWorld(g, t, goal) for g, t, goal in worlds]
     if wording == 'paraphrase':
-        words = np.random.default_rng([seed, size, FAMILIES.index(family), 2])
+        words = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family), 2])
         names = {w for n in table.names for w in n.split('_')}
         worlds = [w._replace(instruction=paraphrase(w.instruction, words, names)) for w in worlds]
     elif wording == 'metric':
-        words = np.random.default_rng([seed, size, FAMILIES.index(family), 2])
+        words = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family), 2])
         worlds = [
             w._replace(**dict(zip(('instruction', 'cell_size'), in_metres(w.instruction, words))))
             for w in worlds
@@ -319,7 +326,11 @@ def register_cli(sub) -> None:
     p.add_argument('--sizes', type=ranged(int, low=5), nargs='+', default=list(DEFAULT_SIZES))
     p.add_argument('--n', type=ranged(int, low=1), default=100, help='worlds per family and size')
     p.add_argument('--seed', type=ranged(int, low=0), default=0)
-    p.add_argument('--families', nargs='+', default=list(FAMILIES), choices=FAMILIES)
+    p.add_argument(
+        '--families', nargs='+', default=list(FAMILIES), choices=SUITE_FAMILIES,
+        help='the families to run (default: the ones the network learned; RELATION_FAMILIES '
+        'on request)',
+    )
     p.add_argument(
         '--entities',
         default=None,
