@@ -19,7 +19,7 @@ The ROS grounder node is a thin adapter over this class.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,13 +27,15 @@ import torch
 
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.footprints import footprints, reduce_footprints
+from .core.grounding import Grounding, REASONS  # noqa: F401 (REASONS: the API's)
 from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .language import compose
 from .language.approach import approach_for
 from .language.checks import map_reason, named_sides, said
+from .language.compose import renamed, shifted
 from .language.lexicon import Lexicon, Mention, Translation
-from .language.places import composed, Landmark, learned_part, Place, surface
+from .language.places import composed, learned_part, Place, surface
 from .language.reading import Command, Reader, Reference
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
@@ -54,62 +56,6 @@ DEFAULT_MIN_CONFIDENCE = 0.1
 
 # how many next-best cells a grounding reports
 ALTERNATIVES = 3
-# the reasons a grounding may decline with (language/checks.py has the structural ones)
-REASONS = (
-    'referent-missing',
-    'unknown-landmark',
-    'off-map',
-    'ambiguous',
-    'unsupported',
-    'goal-on-obstacle',
-    'unreachable',
-    'low-confidence',
-    'unreadable',
-    'negation',
-    'unknown-region',
-)
-
-
-@dataclass
-class Grounding:
-    """
-    One grounded instruction. Maps are (H, W) with row 0 = north.
-
-    `goal` is None when the grounding declines, and `reason` then says why, as a code and
-    words ('referent-missing: rock'); `best` is the model's best cell all the same.
-    `confidence` is the calibrated chance that `best` is the cell meant; `alternatives` the
-    next best cells with theirs.
-    """
-
-    instruction: str
-    values: np.ndarray  # predicted value map
-    relation_map: np.ndarray  # Z1 (the paper's interpretability view is |Z1|)
-    goal: tuple[int, int] | None  # (row, col) of the cell to go to; None: declined
-    words: list[str]
-    attention: list[float] | None  # per word, averaged over cell pairs (t-RNetAttn only)
-    unknown_words: list[str]
-    best: tuple[int, int] = (0, 0)
-    confidence: float = 0.0
-    reason: str | None = None
-    alternatives: list[tuple[tuple[int, int], float]] = field(default_factory=list)
-    landmarks: list[str] = field(default_factory=list)  # the table's names the words named
-    # the cell of a named landmark nearest the best cell (a goal can face it), or None; for a
-    # goal beside a solid landmark (language/approach.py), the landmark's cell nearest the goal
-    referent: tuple[int, int] | None = None
-    model_instruction: str = ''  # what the model read: the landmarks in its own names
-    # what the instruction asks for (language.reading.INTENTS): 'go' one goal; 'sequence'
-    # `steps` in order, `goal` the first's; 'question' no goal, `answer` in words and
-    # `referent` the landmark's cell; 'stop', 'negation', 'unsupported' no goal
-    intent: str = 'go'
-    steps: list['Grounding'] = field(default_factory=list)
-    answer: str | None = None
-    # the goal stands beside a solid landmark it approaches (`referent`), not on a cell named
-    beside: bool = False
-
-    @property
-    def reason_code(self) -> str | None:
-        """Return the reason's code alone ('referent-missing'), or None."""
-        return None if self.reason is None else self.reason.split(':')[0]
 
 
 def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | None:
@@ -117,48 +63,6 @@ def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | No
     if entities is None or isinstance(entities, EntityTable):
         return entities
     return EntityTable.from_yaml(entities)
-
-
-def shifted(values: np.ndarray, offset: tuple[int, int]) -> np.ndarray:
-    """Return a value map moved by (rows, cols), the cells it leaves at its lowest value."""
-    if offset == (0, 0):
-        return values
-    out = np.full_like(values, values.min())
-    h, w = values.shape
-    dr, dc = offset
-    if abs(dr) < h and abs(dc) < w:
-        out[max(dr, 0):h + min(dr, 0), max(dc, 0):w + min(dc, 0)] = values[
-            max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)
-        ]
-    return out
-
-
-def inside(grid: np.ndarray, cell: tuple[int, int]) -> bool:
-    """Say whether a (row, col) is a cell of the grid."""
-    return 0 <= cell[0] < grid.shape[0] and 0 <= cell[1] < grid.shape[1]
-
-
-def compose_pick(landmark: Landmark) -> bool:
-    """Say whether picking the landmark needs the map's landmarks (an ordinal, a farthest)."""
-    return landmark.pick in ('ordinal', 'farthest')
-
-
-def anchor_cell(cells: np.ndarray, offset: tuple[int, int]) -> tuple[int, int]:
-    """Return the landmark's cell an offset is counted from: its edge on the offset's side."""
-    from .core.footprints import anchor, side_of
-
-    return anchor(cells, side_of(offset))
-
-
-def renamed(place: Place, names: dict[str, str]) -> Place:
-    """Return a place with each landmark named by `names` (the table's name -> the network's)."""
-
-    def one(lm):
-        return None if lm is None else replace(lm, name=names.get(lm.name, lm.name),
-                                              anchor=one(lm.anchor))
-
-    return replace(place, landmark=one(place.landmark), other=one(place.other),
-                   on=None if place.on is None else names.get(place.on, place.on))
 
 
 def imaged(grid: np.ndarray, images) -> torch.Tensor:
@@ -360,7 +264,7 @@ class Grounder:
         if ref.place is not None and composed(ref.place):
             return self.ground_composed(grid, instruction, ref, robot_cell)
         model_grid, names, mentions = self.model_view(grid, ref)
-        words, extra = ref.model_words(names)  # what the network learned, as it was said
+        words, extra = self.network_words(ref, names, ref.place)
         values, aux = self.network(model_grid, words)
         values = shifted(values, extra)
         best, confidence, alternatives = self.judge(values)
@@ -376,15 +280,12 @@ class Grounder:
             # the robot stops beside the landmark, whichever side the network favoured: the
             # chance that it is the place meant is the mass on the landmark and around it
             confidence = self.around(values, grid, referent)
-        return self.grounding(
-            grid, instruction, ref, values, aux, words, goal, best, confidence, reason, alternatives,
-            referent, approach is not None and approach.goal is not None,
-        )
+        beside = approach is not None and approach.goal is not None
+        return self.grounding(grid, instruction, ref, values, aux, words, goal, best, confidence,
+                              reason, alternatives, referent, beside)
 
-    def grounding(
-        self, grid, instruction, ref, values, aux, words, goal, best, confidence, reason, alternatives,
-        referent, beside,
-    ) -> Grounding:
+    def grounding(self, grid, instruction, ref, values, aux, words, goal, best, confidence,
+                  reason, alternatives, referent, beside) -> Grounding:
         """Return a Grounding of one place, judged: on an obstacle, or too unsure, declined."""
         if reason is None and goal is not None and int(grid[goal]) in self.entities.never_goal:
             reason = 'goal-on-obstacle'
@@ -393,13 +294,8 @@ class Grounder:
         attention = None if aux is None else aux['attention']
         relation = np.zeros_like(values) if aux is None else aux['relation_map'][0].numpy()
         return Grounding(
-            instruction,
-            values,
-            relation,
-            None if reason else goal,
-            words,
-            None if attention is None else attention[0].tolist(),
-            list(ref.unknown_words),
+            instruction, values, relation, None if reason else goal, words,
+            None if attention is None else attention[0].tolist(), list(ref.unknown_words),
             best=best,
             confidence=confidence,
             reason=reason,
@@ -412,11 +308,12 @@ class Grounder:
 
     def network_words(self, ref: Reference, names: dict, place: Place | None):
         """
-        Return the network's words for a part of a composed place, and the offset to shift by.
+        Return the network's words for a place and the offset to shift its value map by.
 
-        The part is said in the words the network learned it from (places.surface, style 0,
-        the landmarks in its own names); the part of an offset past what it learned shifts its
-        value map (places.learned_part).
+        A place the grammar read is said to the network in the words it learned it from
+        (places.surface, style 0, the landmarks in its own names); the part of an offset past
+        what it learned shifts its value map (places.learned_part). Words the grammar does not
+        read go to the network as read (Reference.model_words).
         """
         table_names = {self.entities.names[k]: v for k, v in names.items()}
         if place is None or None in table_names.values():
@@ -440,101 +337,24 @@ class Grounder:
     def ground_composed(
         self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
     ) -> Grounding:
-        """
-        Return the grounding of a place composed from the network's groundings of its landmarks.
-
-        An offset past the learned ones shifts the network's value map (network_words); between
-        is the midpoint of its two landmarks; an ordinal or a farthest picks among the map's
-        landmarks of the kind (language/compose.py); a corner or a side is the map's own.
-        """
-        place = ref.place
-        missing = self.missing(grid, ref)
-        if missing is not None:
-            return self.declined(grid, instruction, ref, missing)
-        if place.relation in ('corner', 'edge'):
-            cells, reason = compose.map_place(self.entities, grid, place)
-            return self.placed(grid, instruction, ref, cells, 1.0, reason, [], None, robot_cell)
+        """Return the grounding of a place composed from the network's groundings of its parts."""
         model_grid, names, _ = self.model_view(grid, ref)
-        if place.relation == 'between':
-            (a, pa, wa, ra), (b, pb, wb, rb) = (
-                self.locate(grid, model_grid, names, ref, lm) for lm in (place.landmark, place.other)
-            )
-            reason = ra or rb
-            cell = None
-            if reason is None:
-                cell, reason = compose.midpoint(a, b, (place.landmark.name, place.other.name))
-            cells = [] if cell is None else [(cell, 1.0)]
-            return self.placed(grid, instruction, ref, cells, pa * pb, reason, wa + wb, None,
-                               robot_cell)
-        landmark, offset = place.landmark, place.offset
-        if not compose_pick(landmark):  # the network grounds the landmark; an offset shifts
+
+        def network(place: Place):
             words, rest = self.network_words(ref, names, place)
-            values, aux = self.network(model_grid, words)
-            first, _, _ = self.judge(values)
-            target = (first[0] + rest[0], first[1] + rest[1])
-            values = shifted(values, rest)
-            best, confidence, alternatives = self.judge(values)
-            reason = None if inside(grid, target) else 'off-map'
+            return (*self.network(model_grid, words), words, rest)
+
+        kinds = {self.entities.names[m.kind]: m.kind for m in ref.mentions}
+        c = compose.compose(ref.place, self.entities, grid, kinds, ref.reason, network, self.judge)
+        if c.values is not None:  # a shift of the network's value map
+            best, confidence, alternatives = self.judge(c.values)
             referent = nearest_cell(grid, [m.kind for m in ref.mentions], best)
-            return self.grounding(grid, instruction, ref, values, aux, words, best, best, confidence,
-                                  reason, alternatives, referent, False)
-        cells, confidence, words, reason = self.locate(grid, model_grid, names, ref, landmark)
-        if reason is not None:
-            return self.placed(grid, instruction, ref, [], confidence, reason, words, None,
-                               robot_cell)
-        if offset == (0, 0):  # the landmark itself: beside it, if it is solid
-            cell = tuple(int(x) for x in cells[np.abs(cells - compose.centre(cells)).sum(1).argmin()])
-            return self.placed(grid, instruction, ref, [(cell, 1.0)], confidence, None, words,
-                               cell, robot_cell)
-        base = anchor_cell(cells, offset)
-        goal = (base[0] + offset[0], base[1] + offset[1])
-        reason = None if inside(grid, goal) else 'off-map'
-        return self.placed(grid, instruction, ref, [(goal, 1.0)] if reason is None else [],
-                           confidence, reason, words, None, robot_cell)
-
-    def missing(self, grid: np.ndarray, ref: Reference) -> str | None:
-        """Return why a composed place cannot be grounded before any network: a landmark gone."""
-        if ref.reason is not None:
-            return ref.reason
-        for m in ref.mentions:
-            if m.kind not in self.entities.obstacles and not (grid == m.kind).any():
-                return f'referent-missing: {said(self.entities, m.kind)}'
-        return None
-
-    def locate(self, grid, model_grid, names, ref: Reference, landmark: Landmark):
-        """
-        Return (the landmark's cells, confidence, network words, reason) for one landmark.
-
-        The network grounds a landmark said as it learned it ("reach westernmost rock",
-        "reach rock closest to star"); an ordinal or a farthest picks among the kind's
-        landmarks on the map, the farthest from its anchor as the network grounds that.
-        """
-        kind = self.kind_of(ref, landmark.name)
-        found = compose.instances(grid, kind, self.entities.has_footprints)
-        name = landmark.name.replace('_', ' ')
-        if landmark.pick == 'ordinal':
-            i, reason = compose.ordinal(found, landmark, name)
-            return (None if i is None else found[i]), 1.0, [], reason
-        if landmark.pick == 'farthest':
-            cells, confidence, words, reason = self.locate(
-                grid, model_grid, names, ref, landmark.anchor
+            return self.grounding(
+                grid, instruction, ref, c.values, c.aux, c.words, best, best, confidence,
+                c.reason, alternatives, referent, False,
             )
-            if reason is not None:
-                return None, confidence, words, reason
-            anchor = landmark.anchor.name.replace('_', ' ')
-            i, reason = compose.farthest(found, compose.centre(cells), name, anchor)
-            return (None if i is None else found[i]), confidence, words, reason
-        if landmark.pick is None and len(found) > 1:
-            return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
-        words, _ = self.network_words(ref, names, Place('landmark', landmark))
-        values, _ = self.network(model_grid, words)
-        best, confidence, _ = self.judge(values)
-        i = int(np.argmin([((c - np.asarray(best)) ** 2).sum(1).min() for c in found]))
-        return found[i], confidence, words, None
-
-    def kind_of(self, ref: Reference, name: str) -> int:
-        """Return the kind of the table a landmark's name is (one the reference mentions)."""
-        return next(m.kind for m in ref.mentions if self.entities.names[m.kind] == name)
+        return self.placed(grid, instruction, ref, c.cells, c.confidence, c.reason, c.words,
+                           c.landmark_cell, robot_cell)
 
     def placed(
         self, grid, instruction, ref, cells, confidence, reason, words, landmark_cell, robot_cell
@@ -544,12 +364,7 @@ class Grounder:
 
         `landmark_cell`: the place is this landmark's own cell; a solid one is approached.
         """
-        p = np.full(grid.shape, 1e-9)
-        for cell, share in cells:
-            p[cell] = share * max(confidence, 1e-6)
-        rest = 1 - p[[c for c, _ in cells]].sum() if cells else 1.0
-        p[p <= 1e-9] = max(rest, 0) / max((p <= 1e-9).sum(), 1) + 1e-12
-        values = (self.temperature * np.log(p / p.sum())).astype(np.float32)
+        values = compose.cell_values(cells, confidence, grid.shape, self.temperature)
         best, p_best, alternatives = self.judge(values)
         goal, referent, beside = (cells[0][0] if cells else best), None, False
         if landmark_cell is not None:
@@ -568,10 +383,6 @@ class Grounder:
             grid, instruction, ref, values, None, words, None if reason else goal, best,
             p_best if cells else 0.0, reason, alternatives, referent, beside,
         )
-
-    def declined(self, grid, instruction, ref, reason) -> Grounding:
-        """Return a composed place's grounding declined before any network ran."""
-        return self.placed(grid, instruction, ref, [], 0.0, reason, [], None, None)
 
     def model_view(self, grid: np.ndarray, ref: Reference):
         """

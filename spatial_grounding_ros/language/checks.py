@@ -125,7 +125,7 @@ def offset_before(words: list[str], start: int, end: int) -> tuple[int, int]:
     if said and words[said[-1]] in ADJECTIVES:
         end = said[-1]
     dr = dc = 0
-    count, pair = None, None
+    count, pair, pair_count = None, None, 1
     for w in words[start:end]:
         if w in NUMBERS:
             count, pair = NUMBERS[w], None

@@ -16,13 +16,142 @@ unmapped region. Plain numpy: a landmark is its cells ((n, 2) arrays of (row, co
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
 import numpy as np
 
 from .places import Landmark, ORDINAL_WORDS, Place, SIDES
 from ..core.entities import EntityTable
-from ..core.footprints import footprints
+from ..core.footprints import anchor, footprints, side_of
 
 Cell = tuple[int, int]
+# the network's grounding of a place it learned: (value map, its aux, its words, the rest of
+# the offset to shift the map by); and the grounder's judge: (best cell, confidence, others)
+Network = Callable[[Place], tuple]
+Judge = Callable[[np.ndarray], tuple]
+
+
+@dataclass
+class Composed:
+    """
+    A composed place: its cells and how sure, or a shift of the network's value map.
+
+    `cells`: [(cell, share)], none when declined; `values`: the network's value map, shifted;
+    `landmark_cell`: the place is that landmark's own cell.
+    """
+
+    cells: list = field(default_factory=list)
+    confidence: float = 0.0
+    reason: str | None = None
+    words: list = field(default_factory=list)
+    values: np.ndarray | None = None
+    aux: dict | None = None
+    landmark_cell: Cell | None = None
+
+
+def compose(
+    place: Place, table: EntityTable, grid: np.ndarray, kinds: dict[str, int],
+    reason: str | None, network: Network, judge: Judge,
+) -> Composed:
+    """
+    Return a composed place's cells from the network's groundings of its landmarks.
+
+    An offset past the learned ones shifts the network's value map of the learned part
+    (places.learned_part); between is the midpoint of its two landmarks; an ordinal or a
+    farthest picks among the map's landmarks of the kind; a corner or a side is the map's.
+    `kinds`: each landmark name's kind; `reason`: why the reading already declines, or None.
+    """
+    for name, kind in kinds.items():
+        if reason is None and kind not in table.obstacles and not (grid == kind).any():
+            reason = f'referent-missing: {name.replace("_", " ")}'
+    if reason is not None:
+        return Composed(reason=reason)
+    if place.relation in ('corner', 'edge'):
+        cells, reason = map_place(table, grid, place)
+        return Composed(cells, 1.0, reason)
+    locate = Locator(table, grid, kinds, network, judge)
+    if place.relation == 'between':
+        (a, pa, wa, ra), (b, pb, wb, rb) = map(locate, (place.landmark, place.other))
+        reason = ra or rb
+        cell = None
+        if reason is None:
+            cell, reason = midpoint(a, b, (place.landmark.name, place.other.name))
+        return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
+    landmark, offset = place.landmark, place.offset
+    if landmark.pick not in ('ordinal', 'farthest'):  # the network's landmark, shifted
+        values, aux, words, rest = network(place)
+        first, _, _ = judge(values)
+        target = (first[0] + rest[0], first[1] + rest[1])
+        return Composed(reason=None if inside(grid, target) else 'off-map', words=words,
+                        values=shifted(values, rest), aux=aux)
+    cells, confidence, words, reason = locate(landmark)
+    if reason is not None:
+        return Composed([], confidence, reason, words)
+    if offset == (0, 0):  # the landmark itself: beside it, if it is solid
+        near = np.abs(cells - centre(cells)).sum(1).argmin()
+        cell = (int(cells[near][0]), int(cells[near][1]))
+        return Composed([(cell, 1.0)], confidence, None, words, landmark_cell=cell)
+    base = anchor(cells, side_of(offset))
+    goal = (base[0] + offset[0], base[1] + offset[1])
+    if not inside(grid, goal):
+        return Composed([], confidence, 'off-map', words)
+    return Composed([(goal, 1.0)], confidence, None, words)
+
+
+class Locator:
+    """Find one landmark of a place: (its cells, confidence, network words, reason)."""
+
+    def __init__(self, table, grid, kinds, network: Network, judge: Judge):
+        self.table, self.grid, self.kinds = table, grid, kinds
+        self.network, self.judge = network, judge
+
+    def __call__(self, landmark: Landmark):
+        """
+        Return the landmark's cells, how sure, the network's words and None, or why not.
+
+        The network grounds a landmark said as it learned it ("reach westernmost rock",
+        "reach rock closest to star"); an ordinal or a farthest picks among the kind's
+        landmarks on the map, the farthest from its anchor as the network grounds that.
+        """
+        found = instances(self.grid, self.kinds[landmark.name], self.table.has_footprints)
+        name = landmark.name.replace('_', ' ')
+        if landmark.pick == 'ordinal':
+            i, reason = ordinal(found, landmark, name)
+            return (None if i is None else found[i]), 1.0, [], reason
+        if landmark.pick == 'farthest':
+            cells, confidence, words, reason = self(landmark.anchor)
+            if reason is not None:
+                return None, confidence, words, reason
+            i, reason = farthest(found, centre(cells), name, landmark.anchor.name)
+            return (None if i is None else found[i]), confidence, words, reason
+        if landmark.pick is None and len(found) > 1:
+            return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
+        values, _, words, _ = self.network(Place('landmark', landmark))
+        best, confidence, _ = self.judge(values)
+        i = int(np.argmin([((c - np.asarray(best)) ** 2).sum(1).min() for c in found]))
+        return found[i], confidence, words, None
+
+
+def inside(grid: np.ndarray, cell: Cell) -> bool:
+    """Say whether a (row, col) is a cell of the grid."""
+    return 0 <= cell[0] < grid.shape[0] and 0 <= cell[1] < grid.shape[1]
+
+
+def shifted(values: np.ndarray, offset: tuple[int, int]) -> np.ndarray:
+    """Return a value map moved by (rows, cols), the cells it leaves at its lowest value."""
+    if offset == (0, 0):
+        return values
+    out = np.full_like(values, values.min())
+    h, w = values.shape
+    dr, dc = offset
+    if abs(dr) < h and abs(dc) < w:
+        out[max(dr, 0):h + min(dr, 0), max(dc, 0):w + min(dc, 0)] = values[
+            max(-dr, 0):h + min(-dr, 0), max(-dc, 0):w + min(-dc, 0)
+        ]
+    return out
+
+
 _FROM = {'north': 'the top', 'south': 'the bottom', 'west': 'the left', 'east': 'the right'}
 
 
@@ -115,3 +244,25 @@ def map_place(table: EntityTable, grid: np.ndarray, place: Place):
         cell = where[((where - np.asarray(point)) ** 2).sum(1).argmin()]
         out.append(((int(cell[0]), int(cell[1])), 1 / len(points)))
     return out, None
+
+
+def cell_values(cells, confidence: float, shape, temperature: float) -> np.ndarray:
+    """Return a value map whose calibrated softmax puts `confidence` on the place's cells."""
+    p = np.full(shape, 1e-9)
+    for cell, share in cells:
+        p[cell] = share * max(confidence, 1e-6)
+    rest = 1 - sum(p[cell] for cell, _ in cells)
+    p[p <= 1e-9] = max(rest, 0) / max((p <= 1e-9).sum(), 1) + 1e-12
+    return (temperature * np.log(p / p.sum())).astype(np.float32)
+
+
+def renamed(place: Place, names: dict[str, str]) -> Place:
+    """Return a place with each landmark named by `names` (the table's name -> the network's)."""
+
+    def one(lm):
+        if lm is None:
+            return None
+        return replace(lm, name=names.get(lm.name, lm.name), anchor=one(lm.anchor))
+
+    return replace(place, landmark=one(place.landmark), other=one(place.other),
+                   on=None if place.on is None else names.get(place.on, place.on))

@@ -5,41 +5,25 @@
 # https://opensource.org/licenses/MIT.
 
 """
-The place an instruction names, as one typed value: what the generator renders and the reading
-parses back.
+The place an instruction names, as one typed value the generator words and the reading parses.
 
 A `Place` is a relation to landmarks (`Landmark`: a kind's name and what picks one of several)
 or to the map itself. `surface(place, style)` words it (style 0 is Janner et al.'s synthetic
 grammar, word for word, for the relations the network learned from it; other styles are the
 ways people say the same), and `parse(words, names)` reads a reference's words, each landmark
-held as one slot, back into the Place, so that parse(surface(x)) == x for every Place the
-generator makes (test_places.py).
+held as one slot, back into the Place (grammar.py), so that parse(surface(x)) == x for every
+Place the generator makes (test_places.py).
 
-The grammar, in one place (GRAMMAR below lists its relations):
-
-    place    := offset? landmark | between | row-col | corner | edge
-    offset   := (count unit? direction+ ("and")?)+ ("of" | "from" | "to")?
-    landmark := slot | extreme slot | ordinal slot "from the" side | ordinal-superlative slot
-              | slot ("closest" | "nearest") "to"? landmark | "the"? slot "farthest from" slot
-    between  := slot? ("halfway" | "midway" | "the midpoint")? "between" slot "and" slot
-    row-col  := slot? offset slot "and" offset slot
-    corner   := side side "corner" ("of the" map-word)?
-    edge     := ("middle" | "centre") "of the" side ("wall" | "edge" | "side") ("of the" map)?
-
-Parsing is conservative: a reference with a word the grammar does not account for gives
-None, and the network reads its words as they are (what people say is wider than any
-grammar). A place the network did not learn (`composed`) is grounded by composing the
-network's groundings of its landmarks (grounder.py): an offset past the learned ones as a
-shift of the value map, between as the midpoint, an ordinal or farthest over the map's
-landmarks of the kind, a corner or an edge from the map alone.
+A place the network did not learn (`composed`) is grounded by composing the network's
+groundings of its landmarks (language/compose.py): an offset past the learned ones as a shift
+of the value map, between as the midpoint, an ordinal or farthest over the map's landmarks of
+the kind, a corner or an edge from the map alone.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .checks import DIRECTIONS, NUMBERS
-from ..core.text import tokenize
 
 # the four sides, as (row, col) steps; row 0 is north
 SIDES = {'north': (-1, 0), 'south': (1, 0), 'west': (0, -1), 'east': (0, 1)}
@@ -72,7 +56,9 @@ CORNERS = ('north-west', 'north-east', 'south-west', 'south-east')
 # the longest count along one axis, and along each of two, that the network learned; longer
 # offsets are its grounding of the learned part, shifted by the rest (one mechanism)
 LEARNED_STRAIGHT, LEARNED_TWO_AXES = 4, 2
-UNIT_WORDS = frozenset('cell cells square squares step steps space spaces tile tiles spot spots'.split())
+UNIT_WORDS = frozenset(
+    'cell cells square squares step steps space spaces tile tiles spot spots'.split()
+)
 MAP_NOUNS = frozenset('map grid room area world board floor space'.split())
 EDGE_NOUNS = frozenset('wall edge side border'.split())
 NEAR_WORDS = frozenset('closest nearest'.split())
@@ -85,9 +71,6 @@ PLACE_WORDS = (
     | NEAR_WORDS | FAR_WORDS | MIDDLE_WORDS | HALFWAY_WORDS
     | frozenset('corner between from of to the a and away with cell counting diagonally'.split())
 )  # fmt: skip
-# what a Place's relation may be
-RELATIONS = ('landmark', 'between', 'row-col', 'corner', 'edge')
-PICKS = (None, 'extreme', 'ordinal', 'closest', 'farthest')
 
 
 @dataclass(frozen=True)
@@ -186,7 +169,9 @@ _ONE_STEP = {
     (-1, -1): 'to top left of', (-1, 1): 'to top right of',
     (1, -1): 'to bottom left of', (1, 1): 'to bottom right of',
 }  # fmt: skip
-_STRAIGHT_SIDE = {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'to the left of', (0, 1): 'to the right of'}
+_STRAIGHT_SIDE = {
+    (-1, 0): 'above', (1, 0): 'below', (0, -1): 'to the left of', (0, 1): 'to the right of'
+}
 _COMPASS = {(-1, 0): 'north', (1, 0): 'south', (0, -1): 'west', (0, 1): 'east'}
 _PLAIN = {(-1, 0): 'up', (1, 0): 'down', (0, -1): 'left', (0, 1): 'right'}
 _VERTICAL_ADJ = {-1: 'above', 1: 'below'}
@@ -201,7 +186,9 @@ _EDGE_WORDS = {
     'west': ('west', 'left'), 'east': ('east', 'right'),
 }  # fmt: skip
 _FROM_THE = {'north': 'top', 'south': 'bottom', 'west': 'left', 'east': 'right'}
-_ORDINAL_SUPERLATIVE = {'north': 'highest', 'south': 'lowest', 'west': 'leftmost', 'east': 'rightmost'}
+_ORDINAL_SUPERLATIVE = {
+    'north': 'highest', 'south': 'lowest', 'west': 'leftmost', 'east': 'rightmost'
+}
 # how many ways `surface` words each kind of place (style 0 .. n-1)
 STYLES = {
     'janner': 1, 'diagonal': 4, 'compound': 3, 'long-offset': 3, 'between': 4, 'ordinal': 3,
@@ -288,8 +275,9 @@ def _offset_words(offset: tuple[int, int], style: int) -> str:
 
 def surface(place: Place, style: int = 0) -> str:
     """
-    Return a place in words: style 0 in Janner's grammar where the network learned the place
-    from it, else as people say it; other styles are other ways to say the same (STYLES).
+    Return a place in words, in one of the ways people say it (STYLES).
+
+    Style 0 is Janner's grammar where the network learned the place from it.
     """
     if place.relation == 'corner':
         words = _CORNER_WORDS[place.side][style % 3]
@@ -297,7 +285,8 @@ def surface(place: Place, style: int = 0) -> str:
                 f'go to the {words} corner of the room'][style % 3]
     if place.relation == 'edge':
         side = _EDGE_WORDS[place.side][style % 2]
-        return [f'go to the middle of the {side} wall', f'the middle of the {side} edge of the map',
+        return [f'go to the middle of the {side} wall',
+                f'the middle of the {side} edge of the map',
                 f'the centre of the {side} side of the room'][style % 3]
     target = place.on or 'cell'
     if place.relation == 'between':
@@ -325,184 +314,3 @@ def surface(place: Place, style: int = 0) -> str:
     if offset == (0, 0):
         return f'go to {said}'
     return f'go {_offset_words(offset, style)} {said}'
-
-
-# -- parse: words back into a Place ---------------------------------------------------------
-INTENSIFIERS = frozenset('right just directly straight'.split())
-OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
-_VERB_TO = [[w, 'to'] for w in ('over', 'up', 'down', 'out', 'back', 'on')]
-_OPENING = frozenset('reach go to the a cell find get move head navigate drive please'.split())
-
-
-def _side_pair(words: list[str]) -> str | None:
-    """Return the corner two side words name ("top left", "north-west"), or None."""
-    sides = [SIDE_WORDS.get(w) for w in words]
-    if len(sides) == 1 and words[0] in ('northwest', 'northeast', 'southwest', 'southeast'):
-        return f'{words[0][:5]}-{words[0][5:]}'
-    if len(sides) != 2 or None in sides:
-        return None
-    vertical = next((s for s in sides if s in ('north', 'south')), None)
-    horizontal = next((s for s in sides if s in ('west', 'east')), None)
-    return f'{vertical}-{horizontal}' if vertical and horizontal else None
-
-
-def parse_offset(words: list[str]) -> tuple[int, int] | None:
-    """
-    Return the offset the words say, or None if a word is no part of one.
-
-    "two cells north east" is (-2, 2) (a count goes with both words of a diagonal); "three
-    right and two down" is (2, 3); a direction with no count is one step.
-    """
-    dr = dc = 0
-    count, i, seen = None, 0, False
-    kept = [w for w in words if w not in OFFSET_GLUE]
-    while i < len(kept):
-        w = kept[i]
-        if w in INTENSIFIERS and kept[i + 1:i + 2] and DIRECTIONS.get(kept[i + 1], (0, 0))[0]:
-            pass  # "right above the sofa": straight above it
-        elif w in NUMBERS and count is None:
-            count = NUMBERS[w]
-        elif w in UNIT_WORDS:
-            pass
-        elif w in DIRECTIONS:
-            step = DIRECTIONS[w]
-            if i + 1 < len(kept) and kept[i + 1] in DIRECTIONS:  # "north east", "top left"
-                nxt = DIRECTIONS[kept[i + 1]]
-                if step[1] == 0 and step[0] and nxt[0] == 0 and nxt[1]:  # as compass words go
-                    step = (step[0] + nxt[0], step[1] + nxt[1])
-                    i += 1
-            n = 1 if count is None else count
-            dr, dc, count, seen = dr + n * step[0], dc + n * step[1], None, True
-        else:
-            return None
-        i += 1
-    return (dr, dc) if seen and count is None else None
-
-
-def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
-    """Return the Landmark the words name (slots '@k' for landmarks), or None."""
-    words = [w for w in words if w not in ('the', 'a')]
-    slots = [i for i, w in enumerate(words) if w in names]
-    if not slots:
-        return None
-    first = slots[0]
-    name = names[words[first]]
-    before, after = words[:first], words[first + 1:]
-    if len(slots) > 1:  # closest / farthest: "<name> closest to <anchor>", "farthest <name> from"
-        head = after[:slots[1] - first - 1]
-        anchor = _landmark(words[slots[1]:], names)
-        if anchor is None:
-            return None
-        relation = [w for w in before + head if w not in ('to', 'from', 'away')]
-        if len(relation) == 1 and relation[0] in NEAR_WORDS and before in ([], relation):
-            return Landmark(name, 'closest', anchor=anchor)
-        if len(relation) == 1 and relation[0] in FAR_WORDS and 'from' in before + head:
-            return Landmark(name, 'farthest', anchor=anchor)
-        return None
-    if not before and not after:
-        return Landmark(name)
-    if len(before) == 1 and not after and before[0] in SUPERLATIVES:
-        return Landmark(name, 'extreme', SUPERLATIVES[before[0]])
-    if before and before[0] in ORDINALS:
-        rank = ORDINALS[before[0]]
-        if len(before) == 2 and before[1] in SUPERLATIVES and not after:
-            side = SUPERLATIVES[before[1]]
-        elif len(before) == 1 and after[:1] in (['from'], ['counting']):
-            rest = [w for w in after if w not in ('from', 'counting')]
-            if len(rest) != 1 or rest[0] not in SIDE_WORDS:
-                return None
-            side = SIDE_WORDS[rest[0]]
-        else:
-            return None
-        return Landmark(name, 'extreme', side) if rank == 1 else Landmark(name, 'ordinal', side, rank)
-    return None
-
-
-def parse(words: list[str], names: dict[str, str]) -> Place | None:
-    """
-    Return the Place a reference's words name, or None if the grammar does not read them all.
-
-    `words`: the reference's words with each landmark as one slot word; `names`: each slot
-    word's landmark (the table's name of its kind).
-    """
-    words = list(words)
-    while words and (words[0] in _OPENING or words[:2] in _VERB_TO) and not (
-        words[0] == 'cell' and words[1:2] == ['with']
-    ):
-        if words[:2] in _VERB_TO:  # "go over to the couch": the verb's, no direction
-            words = words[1:]
-        if words[0] == 'to' and words[1:2] and words[1] in DIRECTIONS:  # "to top left of"
-            break
-        words = words[1:]
-    if words[:2] == ['cell', 'with']:
-        words = words[2:]
-    slots = [i for i, w in enumerate(words) if w in names]
-    if not slots:
-        return _map_place(words)
-    on = None
-    # a landmark named on the goal cell: "reach rock between star and circle", "reach rock one
-    # below star and two to the left of heart"
-    if slots[0] == 0 and (words[1:2] == ['between'] or len(slots) == 3):
-        on, words = names[words[0]], words[1:]
-        slots = [i - 1 for i in slots[1:]]
-    if 'between' in words:
-        k = words.index('between')
-        lead = [w for w in words[:k] if w not in ('the', 'cell')]
-        rest = words[k + 1:]
-        if lead not in ([], ['halfway'], ['midway'], ['midpoint'], ['middle']) or 'and' not in rest:
-            return None
-        j = rest.index('and')
-        a, b = _landmark(rest[:j], names), _landmark(rest[j + 1:], names)
-        if a is None or b is None:
-            return None
-        return Place('between', a, other=b, on=on)
-    if len(slots) == 2 and 'and' in words[slots[0] + 1:slots[1]]:  # row-col
-        j = words.index('and', slots[0] + 1)
-        first = parse_offset(words[:slots[0]])
-        second = parse_offset(words[j + 1:slots[1]])
-        if first is None or second is None or first[1] or second[0] or words[slots[0] + 1:j]:
-            return None
-        return Place('row-col', Landmark(names[words[slots[0]]]), first,
-                     Landmark(names[words[slots[1]]]), second, on=on)
-    if on is not None:
-        return None
-    # an offset, then the landmark: the offset ends at "of"/"from"/"to"/a count's direction
-    start = _landmark_start(words, slots[0])
-    offset = (0, 0)
-    if start:
-        offset = parse_offset(words[:start])
-        if offset is None:
-            return None
-    landmark = _landmark(words[start:], names)
-    return None if landmark is None else Place('landmark', landmark, offset)
-
-
-def _landmark_start(words: list[str], slot: int) -> int:
-    """Return where the landmark's words begin: after the offset's last direction word."""
-    i = slot
-    while i > 0 and (words[i - 1] in ORDINALS or words[i - 1] in SUPERLATIVES
-                     or words[i - 1] in FAR_WORDS | NEAR_WORDS | {'the', 'a'}):
-        i -= 1
-    # "of the", "from the": part of the offset
-    return i
-
-
-def _map_place(words: list[str]) -> Place | None:
-    """Return a corner or an edge of the map the words name, or None."""
-    words = [w for w in words if w not in ('the', 'a')]
-    tail = ['of', words[-1]] if len(words) > 2 and words[-2] == 'of' else []
-    if tail and tail[1] not in MAP_NOUNS:
-        return None
-    body = words[: len(words) - len(tail)]
-    if body[-1:] == ['corner']:
-        side = _side_pair(body[:-1])
-        return None if side is None else Place('corner', side=side)
-    if len(body) == 4 and body[0] in MIDDLE_WORDS and body[1] == 'of' and body[3] in EDGE_NOUNS:
-        side = SIDE_WORDS.get(body[2])
-        return None if side is None else Place('edge', side=side)
-    return None
-
-
-def words_of(text: str) -> list[str]:
-    """Return the words of a text as the grammar reads them (tokenized)."""
-    return tokenize(text)

@@ -25,10 +25,10 @@ node and its service. The reading is a list of named stages, each a small functi
    a relation the model never learned (`unsupported`), a side a map has not (`ambiguous`).
 
 Why a table-driven reader and not a parsing library's grammar: what people say to a robot is
-not a language to accept or reject. A reading must go on past a word it does not know, keep
+not a language to accept or reject. A reading goes on past a word it does not know, keeps
 the words it cannot type for the network (which learned from human annotators' free text),
-and be cheap (well under a millisecond at ten words). The grammar is the word classes of
-vocabulary.py, checks.py and wording.py, and the stages below that read them in order.
+and is cheap (well under a millisecond at ten words). Where the place's grammar (grammar.py)
+reads every word, the Reference holds the typed Place (places.py) too.
 """
 
 from __future__ import annotations
@@ -48,9 +48,10 @@ from .checks import (
     SIDELESS,
     UNLEARNED,
 )
+from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
-from .places import FAR_WORDS, parse, Place, PLACE_WORDS
+from .places import FAR_WORDS, Place, PLACE_WORDS
 from .units import digits, in_cells, LEARNED_COUNT, offsets
 from .vocabulary import (
     CORRECTIONS,
@@ -84,9 +85,7 @@ from .wording import (
 from ..core.text import tokenize
 
 INTENTS = ('go', 'stop', 'question', 'sequence', 'negation', 'unsupported')
-# a landmark's slot in a reference's words: '@0', '@1', ... one token per mention, never a
-# word of any text (the tokenizer keeps no '@')
-SLOT = '@'
+SLOT = '@'  # a landmark's slot in a reference's words: '@0', '@1', ... (tokens have no '@')
 
 
 # the words a path passed ends before: where the place to go is said
@@ -96,8 +95,7 @@ PATH_ENDS = (
 )
 
 
-# the words after a direction's slot: "two cells <direction> of the sofa"
-DIRECTION_ENDS = frozenset('of from the a an to'.split())
+DIRECTION_ENDS = frozenset('of from the a an to'.split())  # after a direction: "two left of"
 
 
 def is_slot(word: str) -> bool:
@@ -382,10 +380,8 @@ class Reader:
         ]  # fmt: skip
         slotted, slots = slot(words, mentions)
         slotted = [w for w in slotted if w not in FILLERS] or slotted
-        names = self.lexicon.table.names
-        place = None if unknown else parse(
-            slotted, {f'{SLOT}{k}': names[m.kind] for k, m in enumerate(slots)}
-        )
+        named = {f'{SLOT}{k}': self.lexicon.table.names[m.kind] for k, m in enumerate(slots)}
+        place = None if unknown else parse(slotted, named)  # the typed place (places.py)
         reason = self.reason_of(words, mentions, unknown, place)
         canon = canonical(slotted, [i for i, w in enumerate(slotted) if is_slot(w)])
         # the words the network learned and the slots: an unknown word cannot move the goal
@@ -394,6 +390,8 @@ class Reader:
         kept = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_for_fixed_target(kept, [i for i, w in enumerate(kept) if is_slot(w)])
         kept = cell_before_count(kept)
+        if place is None and not unknown:  # "the star and one to its left", as reworded
+            place = parse(kept, named)
         return unslot(
             said, kept, slots, reason, tuple(w for _, w in unknown), tuple(spelled), place
         )
