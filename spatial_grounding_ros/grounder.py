@@ -366,7 +366,7 @@ class Grounder:
         """
         values = compose.cell_values(cells, confidence, grid.shape, self.temperature)
         best, p_best, alternatives = self.judge(values)
-        goal, referent, beside = (cells[0][0] if cells else best), None, False
+        goal, referent, beside = best, None, False  # of cells of equal share, the first
         if landmark_cell is not None:
             referent = landmark_cell
             kind = int(grid[landmark_cell])

@@ -29,6 +29,8 @@ Cell = tuple[int, int]
 # the network's grounding of a place it learned: (value map, its aux, its words, the rest of
 # the offset to shift the map by); and the grounder's judge: (best cell, confidence, others)
 Network = Callable[[Place], tuple]
+# picks among a kind's landmarks made on the map, not by the network
+PICKED = ('ordinal', 'closest', 'farthest')
 Judge = Callable[[np.ndarray], tuple]
 
 
@@ -79,7 +81,7 @@ def compose(
             cell, reason = midpoint(a, b, (place.landmark.name, place.other.name))
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
     landmark, offset = place.landmark, place.offset
-    if landmark.pick not in ('ordinal', 'farthest'):  # the network's landmark, shifted
+    if landmark.pick not in PICKED:  # the network's landmark, shifted
         values, aux, words, rest = network(place)
         first, _, _ = judge(values)
         target = (first[0] + rest[0], first[1] + rest[1])
@@ -110,20 +112,21 @@ class Locator:
         """
         Return the landmark's cells, how sure, the network's words and None, or why not.
 
-        The network grounds a landmark said as it learned it ("reach westernmost rock",
-        "reach rock closest to star"); an ordinal or a farthest picks among the kind's
-        landmarks on the map, the farthest from its anchor as the network grounds that.
+        The network grounds a landmark said as it learned it ("reach westernmost rock"); an
+        ordinal, a closest or a farthest picks among the kind's landmarks on the map (the
+        nearest or farthest from its anchor, as the network grounds that).
         """
         found = instances(self.grid, self.kinds[landmark.name], self.table.has_footprints)
         name = landmark.name.replace('_', ' ')
         if landmark.pick == 'ordinal':
             i, reason = ordinal(found, landmark, name)
             return (None if i is None else found[i]), 1.0, [], reason
-        if landmark.pick == 'farthest':
+        if landmark.pick in ('closest', 'farthest'):
             cells, confidence, words, reason = self(landmark.anchor)
             if reason is not None:
                 return None, confidence, words, reason
-            i, reason = farthest(found, centre(cells), name, landmark.anchor.name)
+            anchor = landmark.anchor.name.replace('_', ' ')
+            i, reason = by_distance(found, centre(cells), name, anchor, landmark.pick)
             return (None if i is None else found[i]), confidence, words, reason
         if landmark.pick is None and len(found) > 1:
             return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
@@ -186,20 +189,41 @@ def ordinal(found: list[np.ndarray], landmark: Landmark, name: str):
     return [edge_key(c, landmark.side) for c in found].index(key), None
 
 
-def farthest(found: list[np.ndarray], point: np.ndarray, name: str, anchor: str):
-    """Return (the index of the landmark farthest from `point`, None) or (None, why not)."""
-    if len(found) < 2:
-        return None, f'ambiguous: {len(found)} {name} on the map, none farther than another'
+def by_distance(found: list[np.ndarray], point: np.ndarray, name: str, anchor: str, pick: str):
+    """
+    Return (the index of the landmark nearest or farthest from `point`, None) or (None, why).
+
+    `pick`: 'closest' or 'farthest'; distances between centres (Euclidean, as Janner's worlds
+    say closest); a tie is declined.
+    """
     d = np.array([np.hypot(*(centre(c) - point)) for c in found])
-    ties = int(np.isclose(d, d.max()).sum())
+    best = d.min() if pick == 'closest' else d.max()
+    ties = int(np.isclose(d, best).sum())
     if ties > 1:
-        return None, f'ambiguous: {ties} {name}s tie as farthest from the {anchor}'
-    return int(d.argmax()), None
+        word = 'nearest' if pick == 'closest' else 'farthest'
+        return None, f'ambiguous: {ties} {name}s tie as {word} from the {anchor}'
+    return int(np.flatnonzero(np.isclose(d, best))[0]), None
 
 
 def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str]):
-    """Return (the cell halfway between two landmarks, None) or (None, why not)."""
-    mid = (centre(a) + centre(b)) / 2
+    """
+    Return (the cell halfway between two landmarks, None) or (None, why not).
+
+    On each axis, halfway between their facing edges (of one-cell landmarks, their cells); where
+    their extents overlap, between their centres. An even gap has no middle cell.
+    """
+    mid = []
+    for axis in (0, 1):
+        (lo_a, hi_a), (lo_b, hi_b) = (
+            (int(c[:, axis].min()), int(c[:, axis].max())) for c in (a, b)
+        )
+        if hi_a < lo_b:
+            mid.append((hi_a + lo_b) / 2)
+        elif hi_b < lo_a:
+            mid.append((hi_b + lo_a) / 2)
+        else:
+            mid.append((lo_a + hi_a + lo_b + hi_b) / 4)
+    mid = np.asarray(mid)
     if not np.allclose(mid, np.round(mid)):
         return None, (
             f'ambiguous: halfway between the {names[0]} and the {names[1]} falls between cells '
@@ -213,8 +237,9 @@ def map_place(table: EntityTable, grid: np.ndarray, place: Place):
     Return ([(cell, share)], None) for a corner or a side's middle, or ([], why not).
 
     The mapped area is the box of the cells that are not unknown; its corner (or its side's
-    middle cell: of an even side, both middle cells, each half) is the point; the goal the
-    cell nearest it a robot may stop on. A point in unmapped space is declined.
+    middle cell: of an even side, both middle cells, each half) is the point, if a robot may
+    stop there (a free or costly cell); else the nearest such cell. A point in unmapped space
+    is declined.
     """
     unknown = [k for k, n in enumerate(table.names) if n == 'unknown']
     known = ~np.isin(grid, unknown)
@@ -233,17 +258,18 @@ def map_place(table: EntityTable, grid: np.ndarray, place: Place):
         fixed = (r0 if dr < 0 else r1) if dr else (c0 if dc < 0 else c1)
         points = [(fixed, m) if dr else (m, fixed) for m in middles]
         said = f'the middle of the {place.side} side'
-    stand = known & ~np.isin(grid, sorted(table.never_goal | table.blocks_robot))
+    # a robot stops in the room, not in a doorway or on a landmark it may cross
+    stand = known & np.isin(grid, sorted(table.kinds_that_are('free', 'costly')))
     if not stand.any():
         return [], 'unreachable: no cell of the map to stop on'
-    out = []
-    for point in points:
-        if not known[point]:
-            return [], f'unknown-region: {said} of the map is not mapped'
-        where = np.argwhere(stand)
-        cell = where[((where - np.asarray(point)) ** 2).sum(1).argmin()]
-        out.append(((int(cell[0]), int(cell[1])), 1 / len(points)))
-    return out, None
+    if not all(known[p] for p in points):
+        return [], f'unknown-region: {said} of the map is not mapped'
+    free = [p for p in points if stand[p]]  # of two middle cells, the one a robot may stop on
+    if free:
+        return [((int(r), int(c)), 1 / len(free)) for r, c in free], None
+    where = np.argwhere(stand)
+    d = np.min([((where - np.asarray(p)) ** 2).sum(1) for p in points], 0)
+    return [((int(r), int(c)), 1.0) for r, c in where[d == d.min()][:1]], None
 
 
 def cell_values(cells, confidence: float, shape, temperature: float) -> np.ndarray:

@@ -46,6 +46,8 @@ from .places import (
 INTENSIFIERS = frozenset('right just directly straight'.split())
 OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
 _VERB_TO = [[w, 'to'] for w in ('over', 'up', 'down', 'out', 'back', 'on')]
+# what the place is called before a between: "the point halfway between"
+PLACE_NOUNS = frozenset('the a cell square spot point place location position'.split())
 _OPENING = frozenset('reach go to the a cell find get move head navigate drive please'.split())
 
 
@@ -96,7 +98,7 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
 
 def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
     """Return the Landmark the words name (slots '@k' for landmarks), or None."""
-    words = [w for w in words if w not in ('the', 'a')]
+    words = [w for w in words if w not in ('the', 'a', 'that', 'which', 'is', 'one')]
     slots = [i for i, w in enumerate(words) if w in names]
     if not slots:
         return None
@@ -153,9 +155,13 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
         words = words[1:]
     if words[:2] == ['cell', 'with']:
         words = words[2:]
+    # a wall of a table that has walls is a side of the room when its middle is asked for
+    sides = [names.get(w, w) if names.get(w) in EDGE_NOUNS else w for w in words]
+    if not any(w in names for w in sides) and set(sides) & (MIDDLE_WORDS | {'corner'}):
+        return _map_place(sides)
     slots = [i for i, w in enumerate(words) if w in names]
     if not slots:
-        return _map_place(words)
+        return None
     on = None
     # a landmark named on the goal cell: "reach rock between star and circle", "reach rock one
     # below star and two to the left of heart"
@@ -164,7 +170,7 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
         slots = [i - 1 for i in slots[1:]]
     if 'between' in words:
         k = words.index('between')
-        lead = [w for w in words[:k] if w not in ('the', 'cell')]
+        lead = [w for w in words[:k] if w not in PLACE_NOUNS]
         rest = words[k + 1:]
         if 'and' not in rest or lead not in ([], *([w] for w in HALFWAY_WORDS), ['middle']):
             return None
@@ -206,7 +212,7 @@ def _landmark_start(words: list[str], slot: int) -> int:
 
 def _map_place(words: list[str]) -> Place | None:
     """Return a corner or an edge of the map the words name, or None."""
-    words = [w for w in words if w not in ('the', 'a')]
+    words = [w for w in words if w not in ('the', 'a', 'far', 'very', 'exact')]
     tail = ['of', words[-1]] if len(words) > 2 and words[-2] == 'of' else []
     if tail and tail[1] not in MAP_NOUNS:
         return None
