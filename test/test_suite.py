@@ -91,7 +91,7 @@ def test_suite_json_cli_prints_one_object():
     assert r.returncode == 0, r.stderr
     result = json.loads(r.stdout)
     assert {'hit', 'md', 'n', 'families'} <= set(result)
-    assert set(result['families']) == set(FAMILIES)
+    assert set(result['families']) == set(FAMILIES + RELATION_FAMILIES)  # all by default
     assert result['families']['between-one']['6']['n'] == 2
 
 

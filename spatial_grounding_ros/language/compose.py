@@ -74,9 +74,12 @@ def compose(
         return Composed(cells, 1.0, reason)
     locate = Locator(table, grid, kinds, network, judge)
     if place.relation == 'between':
-        (a, pa, wa, ra), (b, pb, wb, rb) = map(locate, (place.landmark, place.other))
+        (a, pa, wa, ra), (b, pb, wb, rb) = map(locate.candidates, (place.landmark, place.other))
         reason = ra or rb
         cell = None
+        if reason is None:
+            on = None if place.on is None else kinds.get(place.on)
+            a, b, reason = closest_pair(a, b, grid, on, (place.landmark.name, place.other.name))
         if reason is None:
             cell, reason = midpoint(a, b, (place.landmark.name, place.other.name))
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
@@ -121,12 +124,16 @@ class Locator:
         if landmark.pick == 'ordinal':
             i, reason = ordinal(found, landmark, name)
             return (None if i is None else found[i]), 1.0, [], reason
-        if landmark.pick in ('closest', 'farthest'):
-            cells, confidence, words, reason = self(landmark.anchor)
+        if landmark.pick == 'closest' or landmark.pick == 'farthest':
+            anchors, confidence, words, reason = self.candidates(landmark.anchor)
+            if reason is None and len(anchors) > 1 and landmark.pick == 'farthest':
+                reason = f'ambiguous: {len(anchors)} {landmark.anchor.name.replace("_", " ")}s'
             if reason is not None:
                 return None, confidence, words, reason
             anchor = landmark.anchor.name.replace('_', ' ')
-            i, reason = by_distance(found, centre(cells), name, anchor, landmark.pick)
+            # of several anchors ("the rock next to the house"), the landmark nearest any
+            d = [min(np.hypot(*(centre(c) - centre(a))) for a in anchors) for c in found]
+            i, reason = by_distance(d, name, anchor, landmark.pick)
             return (None if i is None else found[i]), confidence, words, reason
         if landmark.pick is None and len(found) > 1:
             return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
@@ -134,6 +141,19 @@ class Locator:
         best, confidence, _ = self.judge(values)
         i = int(np.argmin([((c - np.asarray(best)) ** 2).sum(1).min() for c in found]))
         return found[i], confidence, words, None
+
+    def candidates(self, landmark: Landmark):
+        """
+        Return ([each landmark it may be], confidence, words, reason).
+
+        A kind said alone ("the rock" of several) may be any of its landmarks; the relation
+        then picks.
+        """
+        found = instances(self.grid, self.kinds[landmark.name], self.table.has_footprints)
+        if landmark.pick is None and len(found) > 1:
+            return found, 1.0, [], None
+        cells, confidence, words, reason = self(landmark)
+        return [cells], confidence, words, reason
 
 
 def inside(grid: np.ndarray, cell: Cell) -> bool:
@@ -189,20 +209,43 @@ def ordinal(found: list[np.ndarray], landmark: Landmark, name: str):
     return [edge_key(c, landmark.side) for c in found].index(key), None
 
 
-def by_distance(found: list[np.ndarray], point: np.ndarray, name: str, anchor: str, pick: str):
+def by_distance(d, name: str, anchor: str, pick: str):
     """
-    Return (the index of the landmark nearest or farthest from `point`, None) or (None, why).
+    Return (the index of the landmark nearest or farthest, None) or (None, why not).
 
-    `pick`: 'closest' or 'farthest'; distances between centres (Euclidean, as Janner's worlds
-    say closest); a tie is declined.
+    `d`: each landmark's distance from the anchor, centre to centre (Euclidean, as Janner's
+    worlds say closest); `pick`: 'closest' or 'farthest'; a tie is declined.
     """
-    d = np.array([np.hypot(*(centre(c) - point)) for c in found])
+    d = np.asarray(d)
     best = d.min() if pick == 'closest' else d.max()
     ties = int(np.isclose(d, best).sum())
     if ties > 1:
         word = 'nearest' if pick == 'closest' else 'farthest'
         return None, f'ambiguous: {ties} {name}s tie as {word} from the {anchor}'
     return int(np.flatnonzero(np.isclose(d, best))[0]), None
+
+
+def closest_pair(a: list, b: list, grid: np.ndarray, on: int | None, names: tuple[str, str]):
+    """
+    Return (a landmark of each, None) for a between, or (None, None, why not).
+
+    Of several of a kind ("between the tree and the rock"), the pair nearest each other; with
+    a landmark named on the goal ("the horse between the circle and the tree"), the pairs whose
+    middle holds it first. A tie is declined.
+    """
+    pairs = [(x, y) for x in a for y in b if x is not y]
+    if on is not None:
+        holding = [(x, y) for x, y in pairs if _middle_holds(x, y, grid, on, names)]
+        pairs = holding or pairs
+    d = np.array([np.hypot(*(centre(x) - centre(y))) for x, y in pairs])
+    if int(np.isclose(d, d.min()).sum()) > 1:
+        return None, None, f'ambiguous: which {names[0]} and {names[1]} is not said'
+    return (*pairs[int(d.argmin())], None)
+
+
+def _middle_holds(x, y, grid, kind, names) -> bool:
+    cell, _ = midpoint(x, y, names)
+    return cell is not None and int(grid[cell]) == kind
 
 
 def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str]):
@@ -236,16 +279,16 @@ def map_place(table: EntityTable, grid: np.ndarray, place: Place):
     """
     Return ([(cell, share)], None) for a corner or a side's middle, or ([], why not).
 
-    The mapped area is the box of the cells that are not unknown; its corner (or its side's
-    middle cell: of an even side, both middle cells, each half) is the point, if a robot may
-    stop there (a free or costly cell); else the nearest such cell. A point in unmapped space
-    is declined.
+    The room is the box of the floor (free or costly cells: inside the walls of a robot's map,
+    all of a PuddleWorld map); its corner, or its side's middle cell (of an even side, both
+    middle cells, each half), is the point. The goal is the point where a robot may stop
+    there (the floor first, then a landmark it may stand on), else the floor cell nearest it.
+    A point the map has not seen is declined.
     """
-    unknown = [k for k, n in enumerate(table.names) if n == 'unknown']
-    known = ~np.isin(grid, unknown)
-    if not known.any():
-        return [], 'unknown-region: nothing of the map is mapped'
-    rows, cols = np.flatnonzero(known.any(1)), np.flatnonzero(known.any(0))
+    floor = np.isin(grid, sorted(table.kinds_that_are('free', 'costly')))
+    if not floor.any():
+        return [], 'unreachable: no floor on the map to stop on'
+    rows, cols = np.flatnonzero(floor.any(1)), np.flatnonzero(floor.any(0))
     r0, r1, c0, c1 = rows[0], rows[-1], cols[0], cols[-1]
     if place.relation == 'corner':
         vertical, horizontal = place.side.split('-')
@@ -258,18 +301,17 @@ def map_place(table: EntityTable, grid: np.ndarray, place: Place):
         fixed = (r0 if dr < 0 else r1) if dr else (c0 if dc < 0 else c1)
         points = [(fixed, m) if dr else (m, fixed) for m in middles]
         said = f'the middle of the {place.side} side'
-    # a robot stops in the room, not in a doorway or on a landmark it may cross
-    stand = known & np.isin(grid, sorted(table.kinds_that_are('free', 'costly')))
-    if not stand.any():
-        return [], 'unreachable: no cell of the map to stop on'
-    if not all(known[p] for p in points):
+    unknown = [k for k, n in enumerate(table.names) if n == 'unknown']
+    if any(int(grid[p]) in unknown for p in points):
         return [], f'unknown-region: {said} of the map is not mapped'
-    free = [p for p in points if stand[p]]  # of two middle cells, the one a robot may stop on
-    if free:
-        return [((int(r), int(c)), 1 / len(free)) for r, c in free], None
-    where = np.argwhere(stand)
-    d = np.min([((where - np.asarray(p)) ** 2).sum(1) for p in points], 0)
-    return [((int(r), int(c)), 1.0) for r, c in where[d == d.min()][:1]], None
+    stand = ~np.isin(grid, sorted(table.never_goal | table.blocks_robot))
+    for where in (floor, stand):  # of two middle cells, the one a robot may stop on
+        found = [p for p in points if where[p]]
+        if found:
+            return [((int(r), int(c)), 1 / len(found)) for r, c in found], None
+    cells = np.argwhere(floor)
+    d = np.min([((cells - np.asarray(p)) ** 2).sum(1) for p in points], 0)
+    return [((int(r), int(c)), 1.0) for r, c in cells[d == d.min()][:1]], None
 
 
 def cell_values(cells, confidence: float, shape, temperature: float) -> np.ndarray:

@@ -27,7 +27,7 @@ reading is asked for on every new instruction, well under a millisecond.
 
 from __future__ import annotations
 
-from .checks import DIRECTIONS, NUMBERS
+from .checks import ADJECTIVES, DIRECTIONS, NUMBERS
 from .places import (
     EDGE_NOUNS,
     FAR_WORDS,
@@ -89,6 +89,8 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
                     step = (step[0] + nxt[0], step[1] + nxt[1])
                     i += 1
             n = 1 if count is None else count
+            if dr * step[0] < 0 or dc * step[1] < 0:  # "above ... below": no one offset
+                return None
             dr, dc, count, seen = dr + n * step[0], dc + n * step[1], None, True
         else:
             return None
@@ -120,6 +122,8 @@ def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
         return Landmark(name)
     if len(before) == 1 and not after and before[0] in SUPERLATIVES:
         return Landmark(name, 'extreme', SUPERLATIVES[before[0]])
+    if len(before) == 1 and not after and before[0] in ADJECTIVES:  # "the bottom house"
+        return Landmark(name, 'extreme', SIDE_WORDS[before[0]])
     if before and before[0] in ORDINALS:
         rank = ORDINALS[before[0]]
         if len(before) == 2 and before[1] in SUPERLATIVES and not after:
@@ -205,6 +209,9 @@ def _landmark_start(words: list[str], slot: int) -> int:
     i = slot
     while i > 0 and (words[i - 1] in ORDINALS or words[i - 1] in SUPERLATIVES
                      or words[i - 1] in FAR_WORDS | NEAR_WORDS | {'the', 'a'}):
+        i -= 1
+    # a side word right before the name picks the landmark: "left of the bottom house"
+    while i > 0 and words[i - 1] in ADJECTIVES:
         i -= 1
     # "of the", "from the": part of the offset
     return i

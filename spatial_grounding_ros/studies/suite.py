@@ -268,9 +268,13 @@ def markdown_table(results: dict[str, dict]) -> str:
         '| family | size | ' + ' | '.join(names) + ' |',
         '| --- | --- | ' + ' | '.join('---' for _ in names) + ' |',
     ]
-    for family in first['families']:
+    families = dict.fromkeys(f for r in results.values() for f in r['families'])
+    for family in families:
         for s in sizes:
-            cells = [f'{r["families"][family][s]["hit"]:.1%}' for r in results.values()]
+            cells = [
+                f'{r["families"][family][s]["hit"]:.1%}' if family in r['families'] else '-'
+                for r in results.values()
+            ]
             lines.append(f'| {family} | {s} | ' + ' | '.join(cells) + ' |')
     for s in sizes:
         cells = [
@@ -327,9 +331,9 @@ def register_cli(sub) -> None:
     p.add_argument('--n', type=ranged(int, low=1), default=100, help='worlds per family and size')
     p.add_argument('--seed', type=ranged(int, low=0), default=0)
     p.add_argument(
-        '--families', nargs='+', default=list(FAMILIES), choices=SUITE_FAMILIES,
-        help='the families to run (default: the ones the network learned; RELATION_FAMILIES '
-        'on request)',
+        '--families', nargs='+', default=list(SUITE_FAMILIES), choices=SUITE_FAMILIES,
+        help='the families to run (default: all, the ones the network learned whole and the '
+        'relations composed from its groundings)',
     )
     p.add_argument(
         '--entities',
