@@ -285,7 +285,53 @@ def markdown_table(results: dict[str, dict]) -> str:
     return '\n'.join(lines) + '\n'
 
 
+def plot_examples(out: str | Path, families, checkpoint='pw_t-rnet-attn', per_family: int = 2,
+                  seed: int = 0) -> list[Path]:
+    """
+    One PNG per family: `per_family` of its 10x10 suite worlds grounded, as a user sees them.
+
+    Each row the map (its landmarks named), the instruction, the named cell (green circle) and
+    the grounder's goal (red x; none when it declines), and the value map behind the goal.
+    """
+    from .plots import plt
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    grounder = Grounder.from_checkpoint(checkpoint)
+    table, paths = grounder.entities, []
+    for family in families:
+        worlds = suite_worlds(family, 10, per_family, seed)
+        fig, axes = plt.subplots(per_family, 2, figsize=(7, 3.6 * per_family), squeeze=False)
+        for w, (ax_map, ax_val) in zip(worlds, axes):
+            g = grounder.ground(w.grid, w.instruction, w.cell_size)
+            ax_map.imshow(np.isin(w.grid, table.obstacles) * 0.6, cmap='Blues', vmin=0, vmax=1)
+            for (r, c), e in np.ndenumerate(w.grid):
+                if e not in table.obstacles and e != table.free_kind:
+                    ax_map.text(c, r, table.names[e][:4], ha='center', va='center', fontsize=7)
+            ax_val.imshow(g.values, cmap='viridis')
+            for ax in (ax_map, ax_val):
+                ax.plot(w.goal[1], w.goal[0], 'o', mfc='none', mec='lime', ms=14, mew=2)
+                if g.goal is not None:
+                    ax.plot(g.goal[1], g.goal[0], 'x', color='red', ms=10, mew=2)
+                ax.set_xticks([])
+                ax.set_yticks([])
+            said = f'"{w.instruction}"'
+            ax_map.set_title(said if len(said) < 48 else said[:46] + '...', fontsize=8, loc='left')
+            ax_val.set_title(f'value map, confidence {g.confidence:.2f}', fontsize=8, loc='left')
+        fig.suptitle(f'{family}: green o = the cell named, red x = the goal sent', fontsize=9)
+        fig.tight_layout()
+        path = out / f'{family}.png'
+        fig.savefig(path, dpi=70)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
 def cmd_suite(args) -> int:
+    if args.examples:
+        for path in plot_examples(args.examples, args.families, args.checkpoint):
+            print(f'wrote {path}')
+        return 0
     result = run_suite(
         args.checkpoint,
         tuple(args.sizes),
@@ -361,4 +407,8 @@ def register_cli(sub) -> None:
     )
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.add_argument('--out', default=None, help='write suite.json and failure PNGs here')
+    p.add_argument(
+        '--examples', default=None, metavar='DIR',
+        help='instead, write one PNG per family of two 10x10 worlds grounded, into DIR',
+    )
     p.set_defaults(func=cmd_suite)
