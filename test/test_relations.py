@@ -137,9 +137,11 @@ def test_a_tie_in_an_ordinal_or_a_farthest_declines(grounder):
     assert g.goal is None and g.reason_code == 'referent-missing'
 
 
-def test_a_long_offset_past_the_edge_is_off_the_map(grounder):
+def test_a_long_offset_past_the_edge_or_from_one_of_several_declines(grounder):
     g = grounder.ground(pw_grid(), 'go eight cells east of the star')
     assert (g.goal, g.reason) == (None, 'off-map')
+    g = grounder.ground(pw_grid(), 'go six cells below the rock')  # three rocks
+    assert (g.goal, g.reason) == (None, 'ambiguous: 3 rocks')
     assert grounder.ground(pw_grid(), 'go five cells east of the star').goal == (4, 9)
 
 

@@ -19,6 +19,7 @@ import re
 import pytest
 from spatial_grounding_ros import cli
 from spatial_grounding_ros.core.tasks import TASKS
+from spatial_grounding_ros.data.generator import RELATION_FAMILIES
 from spatial_grounding_ros.models.checkpoints import load_checkpoint, PACKAGED_DIR
 from spatial_grounding_ros.shapeworld.reproduce import PAPER_ACC
 from spatial_grounding_ros.studies import bench
@@ -403,6 +404,10 @@ def check_prose(text: str) -> list[str]:
     sizes = ('10', '32', '64')
     hits = [suite_run['sizes'][s]['hit'] for s in sizes]
     compare('suite HIT at 10/32/64', figures, hits, same_percent)
+    # the relations people use: the least of their families' rates at any size
+    figures = said(text, 'land on the cell named at least {}% of the time at every size')
+    least = min(suite_run['families'][f][s]['hit'] for f in RELATION_FAMILIES for s in sizes)
+    compare('relations HIT, least', figures, [least], same_percent)
     # the same suite in the office table it never saw (results/landmarks.json, names, plain)
     [office] = [
         r

@@ -85,6 +85,14 @@ def compose(
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
     landmark, offset = place.landmark, place.offset
     if landmark.pick not in PICKED:  # the network's landmark, shifted
+        found = instances(grid, kinds[landmark.name], table.has_footprints)
+        name = landmark.name.replace('_', ' ')
+        if landmark.pick is None and len(found) > 1:
+            return Composed(reason=f'ambiguous: {len(found)} {name}s')
+        if landmark.pick == 'extreme':  # two that share the extreme: no one landmark
+            _, reason = ordinal(found, replace(landmark, rank=1), name)
+            if reason is not None:
+                return Composed(reason=reason)
         values, aux, words, rest = network(place)
         first, _, _ = judge(values)
         target = (first[0] + rest[0], first[1] + rest[1])

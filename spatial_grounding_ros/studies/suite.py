@@ -41,7 +41,7 @@ from ..data.generator import (
 )
 from ..data.paraphrase import in_metres, paraphrase
 from ..data.renaming import NAMINGS, rename
-from ..grounder import Grounder, resolve_table
+from ..grounder import DEFAULT_MIN_CONFIDENCE, Grounder, resolve_table
 from ..models.checkpoints import load_checkpoint
 from ..training.options import ranged
 
@@ -91,10 +91,22 @@ def suite_worlds(
     if wording not in WORDINGS:
         raise ValueError(f'unknown wording {wording!r}; use one of {", ".join(WORDINGS)}')
     rng = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family)])
-    worlds = [sample(rng, family, size) for _ in range(n)]
-    if table.names != PUDDLEWORLD.names or naming != 'name':
-        renamer = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family), 1])
-        worlds = [(*rename(g, t, table, renamer, naming), goal) for g, t, goal in worlds]
+    renamer = np.random.default_rng([seed, size, SUITE_FAMILIES.index(family), 1])
+    renamed = table.names != PUDDLEWORLD.names or naming != 'name'
+    worlds = []
+    for _ in range(100 * n):
+        grid, text, goal = sample(rng, family, size)
+        if renamed:
+            grid, text = rename(grid, text, table, renamer, naming)
+        # a clear instruction never names a cell a robot cannot stop on: a landmark renamed
+        # into solid furniture on the goal of an offset makes it an unanswerable case
+        # (goal-on-obstacle); sent to the landmark itself, the robot stops beside it
+        if family == 'referent' or int(grid[goal]) not in table.never_goal:
+            worlds.append((grid, text, goal))
+        if len(worlds) == n:
+            break
+    else:
+        raise ValueError(f'the {table.domain} table leaves too few clear {family} worlds')
     if table.has_footprints:
         worlds = [(separate(g, t, goal, table), t, goal) for g, t, goal in worlds]
     if footprints:
@@ -165,7 +177,13 @@ def run_suite(
         raise ValueError(f'--n must be at least 1, got {n}')
     loaded = load_checkpoint(checkpoint, expect_entities=PUDDLEWORLD)
     table = resolve_table(entities) or PUDDLEWORLD
-    grounder = Grounder(loaded, table, kinds_by=kinds_by)
+    # a checkpoint never calibrated has a confidence that means little (T = 1): it grounds
+    # at min_confidence 0, as the node's users of such checkpoints are told to
+    calibrated = 'calibration' in loaded.header
+    grounder = Grounder(
+        loaded, table, min_confidence=DEFAULT_MIN_CONFIDENCE if calibrated else 0.0,
+        kinds_by=kinds_by,
+    )
     distances = {f: {} for f in families}
     failures = {f: [] for f in families}
     jobs = [(f, s) for s in sizes for f in families]
