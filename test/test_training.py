@@ -257,8 +257,8 @@ def test_text_noise_waits_for_the_attention():
     model.register_forward_pre_hook(
         lambda m, inputs: unknown[m.attention_on].append(bool((inputs[1] == UNK).any()))
     )
-    run = Epochs(model, [data], vocab, replace(one_epoch(text_noise=10), epochs=2,
-                                               attention_warmup=0.5), Group())
+    tc = replace(one_epoch(text_noise=10), epochs=2, attention_warmup=0.5, noise_share=0.5)
+    run = Epochs(model, [data], vocab, tc, Group())
     run.run(0)
     run.run(1)
     assert unknown[False] and not any(unknown[False])  # the warm-up: clean
