@@ -5,16 +5,20 @@
 # https://opensource.org/licenses/MIT.
 
 """
-A run in one place: `recipe(task, model)`.
+A run in one place: `recipe(task, model)` and `train --show-config`.
 
 The recipe resolves every TrainConfig and ModelConfig field of a run from the task, the model's
 own fields and the settings every task shares (core/tasks.py); the shipped checkpoints were
-trained with what it gives.
+trained with what it gives, and `train --show-config` prints it for every task and model.
 """
 
 from dataclasses import fields
+import json
+import subprocess
+import sys
 
 import pytest
+from spatial_grounding_ros.cli import main
 from spatial_grounding_ros.core import tasks
 from spatial_grounding_ros.models.checkpoints import load_checkpoint, PACKAGED_DIR
 from spatial_grounding_ros.models.config import ModelConfig
@@ -83,3 +87,37 @@ def test_given_options_win_over_the_tasks():
 def test_the_recipe_refuses_what_the_run_refuses(task, model, tc, needle):
     with pytest.raises(ValueError, match=needle):
         recipe(task, model, tc)
+
+
+@pytest.mark.parametrize('task,model', RUNS)
+def test_show_config_prints_the_recipe_for_every_task_and_model(task, model, capsys):
+    argv = ['train', '--task', task, '--model', model, '--data', '/nonexistent', '--show-config']
+    assert main(argv) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith(f'# {task} {model}')
+    names = [line.split(' = ')[0] for line in lines if ' = ' in line]
+    assert names == [
+        *(f.name for f in fields(TrainConfig)), *(f.name for f in fields(ModelConfig)),
+        'synthetic_sizes',
+    ]
+    assert [line for line in lines if line.startswith('[')] == ['[train]', '[model]', '[data]']
+    run = recipe(task, model)
+    assert f'epochs = {run.train.epochs}' in lines
+    assert main([*argv, '--json']) == 0
+    assert json.loads(capsys.readouterr().out) == run.to_dict()
+
+
+def test_show_config_from_the_command_line():
+    """Options given show over the task's; nothing is trained, no data read; bad ones: exit 2."""
+    base = [sys.executable, '-m', 'spatial_grounding_ros.cli', 'train', '--task', 'pw-local',
+            '--model', 't-cnn', '--data', '/nonexistent', '--show-config']
+    shown = subprocess.run([*base, '--epochs', '3'], capture_output=True, text=True, timeout=120)
+    assert shown.returncode == 0, shown.stderr
+    assert 'epochs = 3' in shown.stdout.splitlines()
+    refused = subprocess.run(
+        [*base, '--skip-absent-names'], capture_output=True, text=True, timeout=120
+    )
+    assert refused.returncode == 2
+    assert refused.stderr.strip() == (
+        'spatial-grounding: error: --skip-absent-names: t-cnn does not read it (t-RNet models do)'
+    )
