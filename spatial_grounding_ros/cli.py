@@ -26,9 +26,14 @@ from .data.datasets import DEFAULT_DATA, SPLITS
 def cmd_train(args) -> int:
     from .training import distributed
     from .training.options import given_options
-    from .training.supervised import train_supervised, TrainConfig
+    from .training.recipe import recipe, TrainConfig
+    from .training.supervised import train_supervised
 
     tc = TrainConfig(**given_options(TrainConfig, args))  # the rest: the task's values
+    if args.show_config:  # the run resolved, without training it
+        run = recipe(args.task, args.model, tc)
+        print(json.dumps(run.to_dict(), indent=2) if args.json else '\n'.join(run.lines()))
+        return 0
     path, summary = train_supervised(args.task, args.model, args.data, args.out, tc)
     if distributed.is_main_process():  # under torchrun, one summary, not one per process
         print(json.dumps({'checkpoint': str(path), **summary}, indent=2))
@@ -128,7 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .data.noise import add_noise_options
     from .models.registry import MODELS
     from .training.options import add_options, ranged
-    from .training.supervised import TrainConfig
+    from .training.recipe import TrainConfig
 
     p = _Parser(prog='spatial-grounding', description=__doc__.strip().splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True, parser_class=_Parser)
@@ -143,6 +148,13 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument('--model', required=True, choices=list(MODELS))
     t.add_argument('--data', default=DEFAULT_DATA)
     t.add_argument('--out', default='out')
+    t.add_argument(
+        '--show-config',
+        action='store_true',
+        help='print every setting of the run (training, model, data; the options given over '
+        "the task's) and exit without training",
+    )
+    t.add_argument('--json', action='store_true', help='--show-config as one JSON object')
     add_options(t, TrainConfig, unset=True)
     t.set_defaults(func=cmd_train)
 

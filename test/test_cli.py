@@ -192,8 +192,12 @@ def test_train_options_are_the_config_fields():
         text_noise=TASKS['pw'].text_noise,
         paraphrase=TASKS['pw'].paraphrase,
         generator_mode=TASKS['pw'].generator_mode,
+        late_from=TASKS['pw'].late_from,
         **TASKS['pw'].recipes['t-rnet-attn'],  # the default's own fields (late row-col worlds)
     )
+    # every field is set but the checkpoint to start from (the run resolved: recipe.py)
+    assert [f.name for f in fields(TrainConfig) if getattr(
+        TrainConfig().for_task('pw-local', 't-cnn'), f.name) is None] == ['init']
     # the paper's baselines have a recipe of their own: MSE alone, no distractor objects
     baseline = TrainConfig().for_task('pw-local', 't-cnn')
     assert (baseline.goal_weight, baseline.distractors) == (0.0, 0)

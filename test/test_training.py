@@ -205,12 +205,18 @@ def test_paper_model_drops_the_tasks_additions(tmp_path, paper_model):
 
 
 def test_text_noise_trains_and_is_recorded(tmp_path):
+    """The header and the summary record the run; the summary's recipe (value_map.json's rows)."""
     tc = one_epoch(text_noise=3)
-    path, _ = train_supervised(
+    path, summary = train_supervised(
         'pw-local', 't-rnet-attn', '', tmp_path, tc,
         train_data=generate(40, seed=6, mode='local'), progress=False,
     )
-    assert load_checkpoint(path).header['train_config']['text_noise'] == 3
+    loaded = load_checkpoint(path)
+    assert loaded.header['train_config']['text_noise'] == 3
+    recipe = summary['recipe']
+    assert recipe['train'] == loaded.header['train_config']
+    assert recipe['model_config'] == loaded.model.cfg.to_dict()  # as trained: its vocabulary
+    assert recipe['train']['noise_share'] == 0.5 and recipe['data']['synthetic_sizes']
 
 
 def test_skip_absent_names_is_set_once_trained_and_leaves_the_weights_as_they_were(tmp_path):
@@ -257,8 +263,8 @@ def test_text_noise_waits_for_the_attention():
     model.register_forward_pre_hook(
         lambda m, inputs: unknown[m.attention_on].append(bool((inputs[1] == UNK).any()))
     )
-    run = Epochs(model, [data], vocab, replace(one_epoch(text_noise=10), epochs=2,
-                                               attention_warmup=0.5), Group())
+    tc = replace(one_epoch(text_noise=10), epochs=2, attention_warmup=0.5, noise_share=0.5)
+    run = Epochs(model, [data], vocab, tc, Group())
     run.run(0)
     run.run(1)
     assert unknown[False] and not any(unknown[False])  # the warm-up: clean

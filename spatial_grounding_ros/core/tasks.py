@@ -10,12 +10,23 @@ The grid tasks, one entry each: what they read, how they train, and the paper's 
 Everything that differs between tasks is a field of `Task`; the data loaders, supervised
 training, RL, the reproductions and the command line read it from `TASKS` (pure data: this
 module imports nothing of the package, so every floor can read it). A training option left out
-(`TrainConfig` field None, `train --epochs` not given) takes the task's value from here.
+(`TrainConfig` field None, `train --epochs` not given) takes the task's value from here, or its
+model's (`Task.recipes`); `training/recipe.py` resolves a run's every setting from them
+(`spatial-grounding train --show-config` prints it).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
+# Settings every task's runs share unless a recipe says otherwise.
+# (map size, share of the generated examples): most at Janner's 10x10, some larger so that
+# references that span the map (extremes, gradients) learn how they scale.
+SYNTHETIC_SIZES = ((10, 0.75), (16, 0.17), (24, 0.08))
+# share of epochs before a run's late row-col worlds join (TrainConfig.late_from)
+LATE_FROM = 0.75
+# share of the training instructions that get noise words: the rest stay clean
+NOISE_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -46,6 +57,16 @@ class Task:
     # share of the generated training instructions worded as people word them (data/
     # paraphrase.py; 0: none)
     paraphrase: float = 0.0
+    # share of the training instructions that get the text noise (augment.insert_noise_words)
+    noise_share: float = NOISE_SHARE
+    # generated row-col worlds trained on from `late_from` of the epochs on (0: none)
+    late_row_col: int = 0
+    late_from: float = LATE_FROM
+    # the model reads past unknown words, the noise words also name absent kinds, and once
+    # trained the model reads a name of a kind its map lacks as unknown (TrainConfig has them)
+    skip_unknown: bool = False
+    noise_names: bool = False
+    skip_absent_names: bool = False
     # a model's own TrainConfig fields on this task, over the task's (the paper's baselines)
     recipes: dict = field(default_factory=dict)
     # RL episodes of `reproduce-rl` (None: not one of the paper's RL rows)

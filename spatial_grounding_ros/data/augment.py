@@ -25,6 +25,7 @@ import torch
 
 from .datasets import GroundingSet
 from .noise import ARTICLES, free_cells, VERBS
+from ..core.tasks import NOISE_SHARE
 from ..core.text import PAD, tokenize, UNK, Vocabulary
 
 
@@ -257,10 +258,6 @@ def add_distractors(
         k = min(k, len(cells))
         grid.reshape(-1)[rng.permutation(cells)[:k]] = rng.permutation(ids)[:k]
     return grids
-
-
-# share of the training instructions that get noise words, by default: the rest stay clean
-NOISE_SHARE = 0.5
 
 
 def filler_word_ids(vocab: Vocabulary) -> np.ndarray:

@@ -31,8 +31,9 @@ from ..core.tasks import RL_TASKS, TASKS
 from ..data.datasets import load_task
 from ..data.renaming import NAMINGS
 from ..models.checkpoints import load_checkpoint, PACKAGED_DIR
+from ..training.recipe import recipe, TrainConfig
 from ..training.rl import RLConfig, train_rl
-from ..training.supervised import evaluate, train_supervised, TrainConfig
+from ..training.supervised import evaluate, train_supervised
 
 SHIPPED = ('t-rnet-attn', 't-rnet', 't-cnn')
 # The suite table's columns: the node's default first, then the per-task checkpoints.
@@ -81,7 +82,11 @@ def markdown_table(rows: list[dict]) -> str:
 
 
 def value_map_row(task: str, model_name: str, path: Path, summary: dict, test) -> dict:
-    """Return a trained checkpoint's row of value_map.json: its summary, test metrics, speed."""
+    """
+    Return a trained checkpoint's row of value_map.json: its summary, test metrics, speed.
+
+    The summary holds the run's recipe (training/recipe.py): every setting it trained with.
+    """
     loaded = load_checkpoint(path)
     row = {
         'task': task,
@@ -114,7 +119,7 @@ def reproduce_row(
     from .calibration import calibrate
 
     torch.set_num_threads(1)
-    epochs = TrainConfig().for_task(task, model_name).epochs
+    epochs = recipe(task, model_name).train.epochs
     tc = TrainConfig(epochs=max(1, int(epochs * epochs_scale)), threads=1)
     path, summary = train_supervised(
         task, model_name, data_dir, Path(out) / 'checkpoints', tc, progress=False

@@ -25,7 +25,6 @@ from ..data.augment import (
     add_distractors,
     filler_word_ids,
     insert_noise_words,
-    NOISE_SHARE,
 )
 from ..data.datasets import GroundingSet
 
@@ -72,8 +71,9 @@ class Epochs:
     """
     The optimisation of one training run: its optimizer, schedule, batches and noise.
 
-    `tc` is the run's supervised.TrainConfig. Each process of a data-parallel run builds the
-    same one (same seeds) and runs its share of every batch (distributed.py).
+    `tc` is the run's TrainConfig, resolved (recipe.py: no field the run reads is None). Each
+    process of a data-parallel run builds the same one (same seeds) and runs its share of
+    every batch (distributed.py).
     """
 
     def __init__(
@@ -176,7 +176,7 @@ class Epochs:
                 self.text_noise_rng,
                 pools,
                 unknown=not tc.skip_unknown,  # a model that skips <unk>: no <unk> noise
-                share=NOISE_SHARE if tc.noise_share is None else tc.noise_share,
+                share=tc.noise_share,
             )
         # this process's share (weight 1.0: the whole batch, alone)
         share, weight = distributed.shard(np.arange(len(idx)), processes)
