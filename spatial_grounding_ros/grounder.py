@@ -364,9 +364,13 @@ class Grounder:
 
         `landmark_cell`: the place is this landmark's own cell; a solid one is approached.
         """
-        values = compose.cell_values(cells, confidence, grid.shape, self.temperature)
-        best, p_best, alternatives = self.judge(values)
-        goal, referent, beside = best, None, False  # of cells of equal share, the first
+        values = compose.cell_values(cells, grid.shape)
+        # of cells of equal share, the first; its chance: the network's for the landmarks the
+        # geometry starts from, times its share (a side's two middle cells: half each)
+        (best, share), *others = sorted(cells, key=lambda c: -c[1]) or [((0, 0), 0.0)]
+        p_best = confidence * share
+        alternatives = [(cell, confidence * s) for cell, s in others]
+        goal, referent, beside = best, None, False
         if landmark_cell is not None:
             referent = landmark_cell
             kind = int(grid[landmark_cell])

@@ -116,8 +116,8 @@ def test_the_four_extremes_pick_the_right_rock(grounder, size):
 # shipped default, on these worlds (and over 600, these and two other seeds), when the
 # network read every family whole: 1.0 on every local family and extreme (1.0), 0.995 on
 # extreme-offset (0.998), 1.0 on between (0.993), 0.93 on row-col (0.952) and 0.87 on closest
-# (0.902), its weakest; closest and between are composed since (language/compose.py), 1.0. Each floor sits four or
-# more binomial standard deviations (over 200 worlds) under the lowest of those rates: closest
+# (0.902), its weakest; closest and between are composed since (language/compose.py), 1.0.
+# Each floor sits four or more binomial standard deviations (over 200 worlds) under the lowest of those rates: closest
 # 0.77 (0.87 - 4 x 0.024), row-col 0.85 (0.93 - 4 x 0.018), between 0.93 (0.98, its lowest
 # seed, - 4 x 0.010), and 0.95 where the default misses none (4 sd under a rate of 0.99).
 # So a few argmax flips on another CPU, or a retrained default of the same quality, pass, and

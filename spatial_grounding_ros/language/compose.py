@@ -322,14 +322,12 @@ def map_place(table: EntityTable, grid: np.ndarray, place: Place):
     return [((int(r), int(c)), 1.0) for r, c in cells[d == d.min()][:1]], None
 
 
-def cell_values(cells, confidence: float, shape, temperature: float) -> np.ndarray:
-    """Return a value map whose calibrated softmax puts `confidence` on the place's cells."""
-    p = np.full(shape, 1e-9)
+def cell_values(cells, shape) -> np.ndarray:
+    """Return a composed place's value map: each cell its share, every other cell 0."""
+    values = np.zeros(shape, dtype=np.float32)
     for cell, share in cells:
-        p[cell] = share * max(confidence, 1e-6)
-    rest = 1 - sum(p[cell] for cell, _ in cells)
-    p[p <= 1e-9] = max(rest, 0) / max((p <= 1e-9).sum(), 1) + 1e-12
-    return (temperature * np.log(p / p.sum())).astype(np.float32)
+        values[cell] = share
+    return values
 
 
 def renamed(place: Place, names: dict[str, str]) -> Place:
