@@ -365,8 +365,7 @@ class Grounder:
         `landmark_cell`: the place is this landmark's own cell; a solid one is approached.
         """
         values = compose.cell_values(cells, grid.shape)
-        # of cells of equal share, the first; its chance: the network's for the landmarks the
-        # geometry starts from, times its share (a side's two middle cells: half each)
+        # the first of equal shares; its chance: the network's for the landmarks, times its share
         (best, share), *others = sorted(cells, key=lambda c: -c[1]) or [((0, 0), 0.0)]
         p_best = confidence * share
         alternatives = [(cell, confidence * s) for cell, s in others]

@@ -111,18 +111,18 @@ def test_the_four_extremes_pick_the_right_rock(grounder, size):
         assert grounder.ground(grid, f'reach {word} rock').goal == cell, word
 
 
-# Minimum exact-goal rate per family on 200 fresh generated 10x10 worlds each (the suite's
-# worlds, another seed than the docs' table), one map at a time through the Grounder. The
-# shipped default, on these worlds (and over 600, these and two other seeds), when the
-# network read every family whole: 1.0 on every local family and extreme (1.0), 0.995 on
-# extreme-offset (0.998), 1.0 on between (0.993), 0.93 on row-col (0.952) and 0.87 on closest
-# (0.902), its weakest; closest and between are composed since (language/compose.py), 1.0.
-# Each floor sits four or more binomial standard deviations (over 200 worlds) under the lowest of those rates: closest
-# 0.77 (0.87 - 4 x 0.024), row-col 0.85 (0.93 - 4 x 0.018), between 0.93 (0.98, its lowest
-# seed, - 4 x 0.010), and 0.95 where the default misses none (4 sd under a rate of 0.99).
-# So a few argmax flips on another CPU, or a retrained default of the same quality, pass, and
-# a model that regresses fails (the default before the far relation: 0.83 closest, 0.73
-# row-col; the one before the clear-references work: 0.0-0.37).
+# Minimum exact-goal rate per family on 200 fresh generated 10x10 worlds each (the suite's worlds,
+# another seed than the docs' table), one map at a time through the Grounder. The shipped default,
+# on these worlds (and over 600, these and two other seeds), when the network read every family
+# whole: 1.0 on every local family and extreme (1.0), 0.995 on extreme-offset (0.998), 1.0 on
+# between (0.993), 0.93 on row-col (0.952) and 0.87 on closest (0.902), its weakest; closest and
+# between are composed since (language/compose.py), 1.0. Each floor sits four or more binomial
+# standard deviations (over 200 worlds) under the lowest of those rates: closest 0.77 (0.87 - 4 x
+# 0.024), row-col 0.85 (0.93 - 4 x 0.018), between 0.93 (0.98, its lowest seed, - 4 x 0.010), and
+# 0.95 where the default misses none (4 sd under a rate of 0.99). So a few argmax flips on another
+# CPU, or a retrained default of the same quality, pass, and a model that regresses fails (the
+# default before the far relation: 0.83 closest, 0.73 row-col; the one before the clear-references
+# work: 0.0-0.37).
 FLOOR = {
     **{f: 0.95 for f in LOCAL_FAMILIES},
     'extreme': 0.95,

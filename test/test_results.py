@@ -405,7 +405,7 @@ def check_prose(text: str) -> list[str]:
     hits = [suite_run['sizes'][s]['hit'] for s in sizes]
     compare('suite HIT at 10/32/64', figures, hits, same_percent)
     # the relations people use: the least of their families' rates at any size
-    figures = said(text, 'land on the cell named at least {}% of the time at every size')
+    figures = said(text, 'the least of their rates at any size being {}%')
     least = min(suite_run['families'][f][s]['hit'] for f in RELATION_FAMILIES for s in sizes)
     compare('relations HIT, least', figures, [least], same_percent)
     # the same suite in the office table it never saw (results/landmarks.json, names, plain)

@@ -261,7 +261,7 @@ def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str]):
     Return (the cell halfway between two landmarks, None) or (None, why not).
 
     On each axis, halfway between their facing edges (of one-cell landmarks, their cells); where
-    their extents overlap, between their centres. An even gap has no middle cell.
+    their extents overlap, the middle of the overlap. An even gap has no middle cell.
     """
     mid = []
     for axis in (0, 1):
@@ -272,8 +272,8 @@ def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str]):
             mid.append((hi_a + lo_b) / 2)
         elif hi_b < lo_a:
             mid.append((hi_b + lo_a) / 2)
-        else:
-            mid.append((lo_a + hi_a + lo_b + hi_b) / 4)
+        else:  # side by side on this axis: the middle of the rows (columns) both span
+            mid.append((max(lo_a, lo_b) + min(hi_a, hi_b)) / 2)
     mid = np.asarray(mid)
     if not np.allclose(mid, np.round(mid)):
         return None, (

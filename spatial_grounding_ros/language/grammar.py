@@ -42,6 +42,7 @@ from .places import (
     SUPERLATIVES,
     UNIT_WORDS,
 )
+from .vocabulary import GO_VERBS
 
 INTENSIFIERS = frozenset('right just directly straight'.split())
 OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
@@ -148,7 +149,11 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     `words`: the reference's words with each landmark as one slot word; `names`: each slot
     word's landmark (the table's name of its kind).
     """
-    words = list(words)
+    first = next((i for i, w in enumerate(words) if w in names), len(words))
+    verbs = [i for i, w in enumerate(words[:first]) if w in GO_VERBS]
+    if verbs:  # "the robot should walk over to ...": the place is said after the verb
+        words = words[verbs[-1] + 1:]
+    words = [w for i, w in enumerate(words) if not _particle(words, i)]
     while words and (words[0] in _OPENING or words[:2] in _VERB_TO) and not (
         words[0] == 'cell' and words[1:2] == ['with']
     ):
@@ -202,6 +207,14 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
             return None
     landmark = _landmark(words[start:], names)
     return None if landmark is None else Place('landmark', landmark, offset)
+
+
+def _particle(words: list[str], i: int) -> bool:
+    """Say whether words[i] is a verb's particle: "walk over to the spot", "go up to the door"."""
+    if words[i] not in ('over', 'up', 'down') or words[i + 1:i + 2] != ['to']:
+        return False
+    after = [w for w in words[i + 2:i + 4] if w not in ('the', 'a')][:1]
+    return not after or after[0] not in DIRECTIONS
 
 
 def _landmark_start(words: list[str], slot: int) -> int:

@@ -387,11 +387,11 @@ class Reader:
         # the words the network learned and the slots: an unknown word cannot move the goal
         slots_and_counts = {w for w in canon if is_slot(w) or w.isdigit()}
         kept = tidy(drop_unknown(canon, self.vocab | slots_and_counts))
-        kept = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
-        kept = cell_for_fixed_target(kept, [i for i, w in enumerate(kept) if is_slot(w)])
+        sided = side_of_it(kept, [i for i, w in enumerate(kept) if is_slot(w)])
+        if place is None and not unknown and sided != kept:  # "the star and one to its left"
+            place = parse(sided, named)
+        kept = cell_for_fixed_target(sided, [i for i, w in enumerate(sided) if is_slot(w)])
         kept = cell_before_count(kept)
-        if place is None and not unknown:  # "the star and one to its left", as reworded
-            place = parse(kept, named)
         return unslot(
             said, kept, slots, reason, tuple(w for _, w in unknown), tuple(spelled), place
         )
