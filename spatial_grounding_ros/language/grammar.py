@@ -149,9 +149,12 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     `words`: the reference's words with each landmark as one slot word; `names`: each slot
     word's landmark (the table's name of its kind).
     """
-    first = next((i for i, w in enumerate(words) if w in names), len(words))
-    verbs = [i for i, w in enumerate(words[:first]) if w in GO_VERBS]
-    if verbs:  # "the robot should walk over to ...": the place is said after the verb
+    # "the robot should walk over to ...": the place is said after the verb that opens it
+    # (a verb after a count or a direction is no opening: "two go below the rock")
+    said = (set(DIRECTIONS) | set(NUMBERS) | set(ORDINALS) | set(SUPERLATIVES) | set(names))
+    lead = next((i for i, w in enumerate(words) if w in said), len(words))
+    verbs = [i for i, w in enumerate(words[:lead]) if w in GO_VERBS]
+    if verbs:
         words = words[verbs[-1] + 1:]
     words = [w for i, w in enumerate(words) if not _particle(words, i)]
     while words and (words[0] in _OPENING or words[:2] in _VERB_TO) and not (
