@@ -270,6 +270,7 @@ def test_grounder_keeps_recent_instructions_only():
     first = grounder.ground(grid, 'reach the star')
     grounder.ground(grid, 'reach the rock')
     grounder.ground(grid, 'reach the star')  # used again: now the most recent
-    grounder.ground(grid, 'reach the tree')
-    assert list(grounder.text_codes) == ['reach the star', 'reach the tree']
+    tree = grounder.ground(grid, 'reach the tree')
+    # keyed by what the network reads ("reach cell with star": places.surface)
+    assert list(grounder.text_codes) == [first.model_instruction, tree.model_instruction]
     np.testing.assert_array_equal(grounder.ground(grid, 'reach the star').values, first.values)
