@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from .places import Landmark, ORDINAL_WORDS, Place, SIDES
+from .places import Landmark, ORDINAL_WORDS, PICKED, Place, SIDES
 from ..core.entities import EntityTable
 from ..core.footprints import anchor, footprints, side_of
 
@@ -29,8 +29,6 @@ Cell = tuple[int, int]
 # the network's grounding of a place it learned: (value map, its aux, its words, the rest of
 # the offset to shift the map by); and the grounder's judge: (best cell, confidence, others)
 Network = Callable[[Place], tuple]
-# picks among a kind's landmarks made on the map, not by the network
-PICKED = ('ordinal', 'closest', 'farthest')
 Judge = Callable[[np.ndarray], tuple]
 
 

@@ -52,6 +52,8 @@ ORDINALS = {
     **{f'{k}th': k for k in range(4, 11)},
 }  # fmt: skip
 ORDINAL_WORDS = {k: w for w, k in ORDINALS.items() if w.isalpha()}
+# picks made among a kind's landmarks on the map (language/compose.py), not by the network
+PICKED = ('ordinal', 'closest', 'farthest')
 CORNERS = ('north-west', 'north-east', 'south-west', 'south-east')
 # the longest count along one axis, and along each of two, that the network learned; longer
 # offsets are its grounding of the learned part, shifted by the rest (one mechanism)
@@ -162,7 +164,7 @@ def composed_landmark(landmark: Landmark | None) -> bool:
     """Say whether picking a landmark needs more than the network (an ordinal, a farthest)."""
     if landmark is None:
         return False
-    if landmark.pick in ('ordinal', 'closest', 'farthest'):
+    if landmark.pick in PICKED:
         return True
     return composed_landmark(landmark.anchor)
 

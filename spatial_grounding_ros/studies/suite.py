@@ -249,24 +249,7 @@ def plot_failures(out: Path, failures: dict, table: EntityTable = PUDDLEWORLD) -
             continue
         fig, axes = plt.subplots(len(cases), 2, figsize=(8, 4 * len(cases)), squeeze=False)
         for (size, grid, text, goal, pred, values), (ax_map, ax_val) in zip(cases, axes):
-            ax_map.imshow(np.isin(grid, table.obstacles), cmap='Blues', vmin=0, vmax=2)
-            if size <= 32:
-                for (r, c), e in np.ndenumerate(grid):
-                    if e > 0 and e not in table.obstacles:
-                        ax_map.text(
-                            c,
-                            r,
-                            table.names[e][:3],
-                            ha='center',
-                            va='center',
-                            fontsize=max(3, 70 // size),
-                        )
-            ax_val.imshow(values, cmap='viridis')
-            for ax in (ax_map, ax_val):
-                ax.plot(goal[1], goal[0], 'o', mfc='none', mec='lime', ms=10, mew=2)
-                ax.plot(pred[1], pred[0], 'x', color='red', ms=10, mew=2)
-                ax.set_xticks([])
-                ax.set_yticks([])
+            draw_case(ax_map, ax_val, grid, table, values, goal, pred, labels=size <= 32)
             ax_map.set_title(f'{size}x{size}: {text}', fontsize=8, loc='left')
         fig.suptitle(f"{family}: failures (green o = named cell, red x = model's goal)")
         fig.tight_layout()
@@ -303,6 +286,27 @@ def markdown_table(results: dict[str, dict]) -> str:
     return '\n'.join(lines) + '\n'
 
 
+def draw_case(ax_map, ax_val, grid, table, values, goal, pred, labels=True) -> None:
+    """
+    Draw a map (obstacles shaded, landmarks named) and its value map.
+
+    On both: the cell named (green o) and the goal (red x; none when the grounding declines).
+    """
+    ax_map.imshow(np.isin(grid, table.obstacles), cmap='Blues', vmin=0, vmax=2)
+    if labels:
+        for (r, c), e in np.ndenumerate(grid):
+            if e not in table.obstacles and e != table.free_kind:
+                ax_map.text(c, r, table.names[e][:4], ha='center', va='center',
+                            fontsize=max(3, min(7, 70 // grid.shape[0])))
+    ax_val.imshow(values, cmap='viridis')
+    for ax in (ax_map, ax_val):
+        ax.plot(goal[1], goal[0], 'o', mfc='none', mec='lime', ms=12, mew=2)
+        if pred is not None:
+            ax.plot(pred[1], pred[0], 'x', color='red', ms=10, mew=2)
+        ax.set_xticks([])
+        ax.set_yticks([])
+
+
 def plot_examples(out: str | Path, families, checkpoint='pw_t-rnet-attn', per_family: int = 2,
                   seed: int = 0) -> list[Path]:
     """
@@ -322,17 +326,7 @@ def plot_examples(out: str | Path, families, checkpoint='pw_t-rnet-attn', per_fa
         fig, axes = plt.subplots(per_family, 2, figsize=(7, 3.6 * per_family), squeeze=False)
         for w, (ax_map, ax_val) in zip(worlds, axes):
             g = grounder.ground(w.grid, w.instruction, w.cell_size)
-            ax_map.imshow(np.isin(w.grid, table.obstacles) * 0.6, cmap='Blues', vmin=0, vmax=1)
-            for (r, c), e in np.ndenumerate(w.grid):
-                if e not in table.obstacles and e != table.free_kind:
-                    ax_map.text(c, r, table.names[e][:4], ha='center', va='center', fontsize=7)
-            ax_val.imshow(g.values, cmap='viridis')
-            for ax in (ax_map, ax_val):
-                ax.plot(w.goal[1], w.goal[0], 'o', mfc='none', mec='lime', ms=14, mew=2)
-                if g.goal is not None:
-                    ax.plot(g.goal[1], g.goal[0], 'x', color='red', ms=10, mew=2)
-                ax.set_xticks([])
-                ax.set_yticks([])
+            draw_case(ax_map, ax_val, w.grid, table, g.values, w.goal, g.goal)
             said = f'"{w.instruction}"'
             ax_map.set_title(said if len(said) < 48 else said[:46] + '...', fontsize=8, loc='left')
             ax_val.set_title(f'value map, confidence {g.confidence:.2f}', fontsize=8, loc='left')
