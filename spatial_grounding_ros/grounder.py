@@ -32,7 +32,7 @@ from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .language import compose
 from .language.approach import approach_for
-from .language.checks import map_reason, named_sides, said
+from .language.checks import map_reason, named_sides, place_offsets, said
 from .language.compose import renamed, shifted
 from .language.lexicon import Lexicon, Mention, Translation
 from .language.places import composed, learned_part, Place, surface
@@ -268,11 +268,12 @@ class Grounder:
         values, aux = self.network(model_grid, words)
         values = shifted(values, extra)
         best, confidence, alternatives = self.judge(values)
-        reason = ref.reason or map_reason(self.entities, grid, list(ref.words), list(mentions))
+        offsets = self.offsets(ref)
+        reason = ref.reason or map_reason(self.entities, grid, list(ref.words), mentions, offsets)
         # the approach step: sent to a solid landmark, the robot stops beside it
         goal, referent = best, nearest_cell(grid, [m.kind for m in mentions], best)
         approach = approach_for(
-            self.entities, grid, list(ref.words), list(mentions), best, robot_cell
+            self.entities, grid, list(ref.words), mentions, best, robot_cell, offsets
         )
         if approach is not None:
             goal, referent, reason = approach.goal, approach.referent, reason or approach.reason
@@ -387,6 +388,12 @@ class Grounder:
             p_best if cells else 0.0, reason, alternatives, referent, beside,
         )
 
+    def offsets(self, ref: Reference) -> list | None:
+        """Return each landmark's offset as the typed place says it, or None: the words say."""
+        if ref.place is None:
+            return None
+        return place_offsets(ref.place, list(ref.mentions), self.entities.names)
+
     def model_view(self, grid: np.ndarray, ref: Reference):
         """
         Return the map in the network's kinds, each mentioned kind's name for it, and mentions.
@@ -405,7 +412,7 @@ class Grounder:
             if m.kind in self.entities.obstacles:
                 names[m.kind] = self.model_entities.names[self.model_entities.obstacles[0]]
         if self.entities.has_footprints:
-            sides = named_sides(list(ref.words), mentions)
+            sides = named_sides(list(ref.words), mentions, self.offsets(ref))
             sides = {translated.kinds[k]: v for k, v in sides.items() if k in translated.kinds}
             model_grid = reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
         return model_grid, names, mentions

@@ -152,3 +152,19 @@ def test_a_corner_the_map_has_not_seen_declines(office):
     g = grounder.ground(grid, 'go to the north-west corner of the room')
     assert g.goal is None and g.reason_code == 'unknown-region'
     assert grounder.ground(grid, 'go to the south-east corner').goal == (14, 14)
+
+
+@pytest.mark.parametrize(
+    'text',
+    ['two cells nrth-east of the lamp', 'two above and two to the right of the lamp',
+     'go 2 cells up and 2 right of the lamp'],
+)
+def test_a_typed_place_on_a_wall_declines_whatever_its_model_wording_sums_to(office, text):
+    """The checks read the typed place's offset, (-2, 2): one reading for every check."""
+    table, grid, grounder = office
+    walled = grid.copy()
+    walled[7, 7] = table.index('wall')  # two up and two right of the lamp at (9, 5)
+    assert grounder.read(text).reference.place.offset == (-2, 2)
+    g = grounder.ground(walled, text)
+    assert (g.goal, g.reason) == (None, 'goal-on-obstacle'), g.model_instruction
+    assert grounder.ground(grid, text).goal == (7, 7)

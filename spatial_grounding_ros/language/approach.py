@@ -182,7 +182,12 @@ def approach(
 
 
 def approached_kind(
-    table: EntityTable, grid: np.ndarray, words: list[str], mentions: list[Mention], best: Cell
+    table: EntityTable,
+    grid: np.ndarray,
+    words: list[str],
+    mentions: list[Mention],
+    best: Cell,
+    offsets: list | None = None,
 ) -> int | None:
     """
     Return the solid landmark an instruction sends the robot to, or None.
@@ -191,11 +196,12 @@ def approached_kind(
     nearest the door") whose footprint the model's best cell is on, or the one solid kind
     named when nearness is all the words say of the goal ("go next to the sofa"). An offset
     from a solid landmark ("two cells below the sofa") is taken from its edge as before.
+    `offsets`: the mentions' offsets as the reading has them (checks.map_reason).
     """
     solid = table.solid
     if not solid or not mentions:
         return None
-    sides = named_sides(words, mentions)
+    sides = named_sides(words, mentions, offsets)
     kind = int(grid[best])
     if kind in solid and sides.get(kind) == (0, 0):
         return kind
@@ -223,6 +229,7 @@ def approach_for(
     mentions: list[Mention],
     best: Cell,
     robot_cell: Cell | None = None,
+    offsets: list | None = None,
 ) -> Approach | None:
     """
     Return where to stop when the instruction sends the robot to a solid landmark, or None.
@@ -231,7 +238,7 @@ def approach_for(
     """
     if robot_cell is not None:
         robot_cell = checked_cell(grid, robot_cell)
-    kind = approached_kind(table, grid, words, mentions, best)
+    kind = approached_kind(table, grid, words, mentions, best, offsets)
     if kind is None or not (grid == kind).any():  # a landmark not there: referent-missing
         return None
     footprint = footprint_of(grid, kind, best, table.has_footprints)

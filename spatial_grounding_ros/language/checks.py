@@ -158,24 +158,48 @@ def mention_offsets(words: list[str], mentions: list[Mention]) -> list[tuple[Men
     return pairs
 
 
-def named_sides(words: list[str], mentions: list[Mention]) -> dict[int, tuple[int, int]]:
-    """Return each named kind's side: the signs of its first mention's offset (footprints)."""
+def place_offsets(place, mentions: list[Mention], names) -> list[tuple[Mention, tuple]]:
+    """
+    Pair each mention with its offset as a typed place (places.Place) says it.
+
+    The reading's one account of the offsets, where the grammar read every word: "two cells
+    nrth-east of the lamp" is (-2, 2) from the lamp, whatever its model wording sums to.
+    `names`: the table's name of each kind. A landmark the place does not name has none.
+    """
+    said = [(place.landmark, place.offset), (place.other, place.other_offset)]
+    pairs = []
+    for landmark, offset in said:
+        m = next((m for m in mentions if landmark and names[m.kind] == landmark.name), None)
+        if m is not None and all(m is not n for n, _ in pairs):
+            pairs.append((m, offset))
+    return pairs
+
+
+def named_sides(
+    words: list[str], mentions: list[Mention], offsets: list | None = None
+) -> dict[int, tuple[int, int]]:
+    """
+    Return each named kind's side: the signs of its first mention's offset (footprints).
+
+    `offsets`: the mentions' offsets as the reading has them (place_offsets); by default the
+    words before each mention (mention_offsets).
+    """
     sides: dict[int, tuple[int, int]] = {}
-    for m, offset in mention_offsets(words, mentions):
+    for m, offset in mention_offsets(words, mentions) if offsets is None else offsets:
         sides.setdefault(m.kind, side_of(offset))
     return sides
 
 
-def off_map(grid: np.ndarray, words: list[str], mentions: list[Mention]) -> bool:
+def off_map(grid: np.ndarray, offsets: list[tuple[Mention, tuple]]) -> bool:
     """
     Return whether a named offset from a landmark leaves the map from each of its cells.
 
-    The words before each mention (back to the previous one) are its offset: a row-and-column
-    reference ("one above the star and two to the right of the circle") checks the row of the
-    one and the column of the other.
+    `offsets` pairs each mention with its offset (mention_offsets, place_offsets): a
+    row-and-column reference ("one above the star and two to the right of the circle")
+    checks the row of the one and the column of the other.
     """
     h, w = grid.shape
-    for m, (dr, dc) in mention_offsets(words, mentions):
+    for m, (dr, dc) in offsets:
         if (dr, dc) == (0, 0):
             continue
         rows, cols = np.nonzero(grid == m.kind)
@@ -191,14 +215,12 @@ def off_map(grid: np.ndarray, words: list[str], mentions: list[Mention]) -> bool
     return False
 
 
-def on_obstacle(
-    table: EntityTable, grid: np.ndarray, words: list[str], mentions: list[Mention]
-) -> bool:
+def on_obstacle(table: EntityTable, grid: np.ndarray, offsets: list[tuple[Mention, tuple]]) -> bool:
     """Return whether the one landmark named, held once, has its named offset on an obstacle."""
-    if len({m.kind for m in mentions}) != 1:
+    if len({m.kind for m, _ in offsets}) != 1:
         return False
-    cells = np.argwhere(grid == mentions[0].kind)
-    dr, dc = offset_before(words, 0, mentions[0].start)
+    (m, (dr, dc)), *_ = offsets
+    cells = np.argwhere(grid == m.kind)
     if len(cells) != 1 or (dr, dc) == (0, 0):
         return False
     r, c = cells[0][0] + dr, cells[0][1] + dc
@@ -234,6 +256,7 @@ def ambiguity(
     m: Mention,
     mentions: list[Mention],
     drawn_over_cells: bool = True,
+    offsets: list[tuple[Mention, tuple]] | None = None,
 ):
     """
     Return why the only landmark named is ambiguous, as (how many, why), or None.
@@ -243,7 +266,7 @@ def ambiguity(
     two together usually pick one ("the heart to the left of the horse"), so only a lone
     reference is judged. `drawn_over_cells`: the table's landmarks may cover several cells
     (EntityTable.has_footprints); if not, each cell is one for the extremes, as the grounder
-    and the generator take them.
+    and the generator take them. `offsets`: the mentions' offsets, as map_reason takes them.
     """
     count = count_objects(grid, m.kind)
     if len({x.kind for x in mentions}) > 1 or count < 2:
@@ -256,7 +279,7 @@ def ambiguity(
             return None
         # compared as the grounder compares them: each landmark at its anchor (footprints.py)
         axis, sign = EXTREME_SIDES[before[0]]
-        side = named_sides(words, mentions).get(m.kind, (0, 0))
+        side = named_sides(words, mentions, offsets).get(m.kind, (0, 0))
         landmarks = (
             footprints(grid, m.kind) if drawn_over_cells else np.argwhere(grid == m.kind)[:, None]
         )
@@ -287,7 +310,11 @@ def nearness_alone(words: list[str], mentions: list[Mention]) -> bool:
 
 
 def map_reason(
-    table: EntityTable, grid: np.ndarray, words: list[str], mentions: list[Mention]
+    table: EntityTable,
+    grid: np.ndarray,
+    words: list[str],
+    mentions: list[Mention],
+    offsets: list[tuple[Mention, tuple]] | None = None,
 ) -> str | None:
     """
     Return the first reason the map gives that no cell fits the words, or None.
@@ -295,7 +322,11 @@ def map_reason(
     `words` and `mentions` are a reference as the reading gives it (reading.Reference): the
     model's wording, each landmark one word; what the words alone rule out (an unknown
     landmark, an unlearned relation, a side a map has not) the reading has judged already.
+    `offsets`: each mention's offset where the reading typed the place (place_offsets); by
+    default the words before each mention say it.
     """
+    if offsets is None:
+        offsets = mention_offsets(words, mentions)
     for m in mentions:
         if m.kind in table.obstacles:
             continue
@@ -303,15 +334,15 @@ def map_reason(
             return f'referent-missing: {said(table, m.kind)}'
     if nearness_alone(words, mentions) and mentions[0].kind not in table.solid:
         return f'ambiguous: no side of the {said(table, mentions[0].kind)} is named'
-    if off_map(grid, words, mentions):
+    if off_map(grid, offsets):
         return 'off-map'
-    if on_obstacle(table, grid, words, mentions):
+    if on_obstacle(table, grid, offsets):
         return 'goal-on-obstacle'
     for m in mentions:
         found = (
             None
             if m.kind in table.obstacles
-            else ambiguity(grid, words, m, mentions, table.has_footprints)
+            else ambiguity(grid, words, m, mentions, table.has_footprints, offsets)
         )
         if found is not None:
             n, why = found
