@@ -215,7 +215,9 @@ def off_map(grid: np.ndarray, offsets: list[tuple[Mention, tuple]]) -> bool:
     return False
 
 
-def on_obstacle(table: EntityTable, grid: np.ndarray, offsets: list[tuple[Mention, tuple]]) -> bool:
+def on_obstacle(
+    table: EntityTable, grid: np.ndarray, offsets: list[tuple[Mention, tuple]]
+) -> bool:
     """Return whether the one landmark named, held once, has its named offset on an obstacle."""
     if len({m.kind for m, _ in offsets}) != 1:
         return False
