@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from dataclasses import replace
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -44,10 +45,12 @@ DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 # the map as it is, then its mirror images (the map axes each flips), as training mirrors its
 # human examples (data/augment.py)
 IMAGES = ((), *MIRROR_IMAGES)
-# maps of up to this many cells (128x128) are grounded with their mirror images: four times the
-# work, 2.6 ms against 0.6 ms at 10x10 and 28 against 15 ms at 64x64, but 5-7 times at 256x256
-# and more, where the tiled output network dominates (docs/benchmarks.md)
+# maps of up to this many cells (128x128) may be grounded with their mirror images too
 MIRROR_AVERAGE_CELLS = 128 * 128
+# ... when the map alone leaves the network less sure than this of its best cell (calibrated):
+# the images' mean is steadier where it is unsure, and only there (docs/benchmarks.md has
+# what it costs and what it earns)
+MIRROR_AVERAGE_BELOW = 0.95
 
 
 # the least calibrated confidence a goal is sent with (docs/honest-answers.md has the
@@ -94,6 +97,7 @@ class Grounder:
         cell_size: float | None = None,
         kinds_by: str = 'name',
         mirror_average_cells: int = MIRROR_AVERAGE_CELLS,
+        mirror_average_below: float = MIRROR_AVERAGE_BELOW,
     ):
         """
         Wrap a loaded checkpoint, for maps in `entities` (default: the checkpoint's table).
@@ -103,10 +107,12 @@ class Grounder:
         `cell_size`: metres per cell, for distances in metres (language/units.py); a table's
         landmarks may cover several cells (EntityTable.has_footprints, core/footprints.py).
         `kinds_by`: how the model's own landmark names take its kinds (lexicon.KINDS_BY).
-        `mirror_average_cells`: on maps of at most this many cells the value map is the mean of
-        the model's over the map and its three mirror images, each read with its direction
-        words swapped (IMAGES, in one batch): where the model is unsure of a cell, its mirror
-        images seldom are unsure the same way (0: never). The text codes of the last
+        `mirror_average_cells`, `mirror_average_below`: on maps of at most this many cells, a
+        value map whose best cell has a calibrated chance below `mirror_average_below` is
+        replaced by the mean of the model's over the map and its three mirror images, each
+        read with its direction words swapped (IMAGES; the three in one batch): where the
+        model is unsure of a cell, its mirror images seldom are unsure the same way (cells 0:
+        never; below 1: every map). The text codes of the last
         `cached_instructions` instructions are kept (t-RNetAttn: the relation table over all
         kinds), since a node grounds the same instruction on new maps.
         """
@@ -117,7 +123,10 @@ class Grounder:
         self.model_entities = loaded.entities
         self.entities = entities if entities is not None else loaded.entities
         self.min_confidence, self.cell_size = min_confidence, cell_size
+        if not 0 <= mirror_average_below <= 1:
+            raise ValueError(f'mirror_average_below must be in 0..1, got {mirror_average_below}')
         self.mirror_average_cells = mirror_average_cells
+        self.mirror_average_below = mirror_average_below
         self.translation = None
         if loaded.entities.domain == 'puddleworld':
             self.translation = Translation(
@@ -145,6 +154,8 @@ class Grounder:
         # instruction -> (its words for the model, {images: text code}); least recently used
         # first
         self.text_codes: OrderedDict[str, tuple[str, dict]] = OrderedDict()
+        # an instruction is checked once, not on every map (a failed check is not kept)
+        self.check_instruction = functools.lru_cache(maxsize=256)(self.check_instruction)
 
     @classmethod
     def from_checkpoint(
@@ -154,6 +165,7 @@ class Grounder:
         min_confidence: float = DEFAULT_MIN_CONFIDENCE,
         cell_size: float | None = None,
         mirror_average_cells: int = MIRROR_AVERAGE_CELLS,
+        mirror_average_below: float = MIRROR_AVERAGE_BELOW,
     ) -> 'Grounder':
         """Load a packaged checkpoint by name or a path, for maps of any entity table."""
         return cls(
@@ -162,6 +174,7 @@ class Grounder:
             min_confidence,
             cell_size=cell_size,
             mirror_average_cells=mirror_average_cells,
+            mirror_average_below=mirror_average_below,
         )
 
     def check(self, grid: np.ndarray, instruction: str) -> None:
@@ -205,13 +218,13 @@ class Grounder:
         return self.reader.read(instruction, self.cell_size if cell_size is None else cell_size)
 
     @torch.no_grad()
-    def text_code(self, model_text: str, images: tuple = IMAGES) -> TextCode:
+    def text_code(self, model_text: str, images: tuple = IMAGES[:1]) -> TextCode:
         """
         Return the network's text code of its words for `images` of the map.
 
-        The code holds the words as said of each image of the map (IMAGES: the first is the
-        words as they are; large maps take IMAGES[:1]). Each is computed once, when a map
-        first needs it, while the words are in use.
+        The code holds the words as said of each of `images` (some of IMAGES: the first is
+        the words as they are). Each is computed once, when a map first needs it, while the
+        words are in use.
         """
         codes = self.text_codes.pop(model_text, None)
         if codes is None:
@@ -220,11 +233,11 @@ class Grounder:
                 self.text_codes.popitem(last=False)
         self.text_codes[model_text] = codes
         if images not in codes:
-            # encoded as a batch of all the images' wordings, so that the first image's tokens
-            # carry the same padding whichever images a map takes
+            # encoded as a batch of all the images' wordings, so that an image's tokens carry
+            # the same padding whichever images a map takes
             said = [mirror_instruction(model_text, axes) for axes in IMAGES]
             tokens = torch.as_tensor(self.vocab.encode_batch(said))
-            codes[images] = self.model.text_code(tokens[: len(images)])
+            codes[images] = self.model.text_code(tokens[[IMAGES.index(a) for a in images]])
         return codes[images]
 
     @torch.no_grad()
@@ -329,11 +342,23 @@ class Grounder:
         return surface(renamed(place, table_names)).split(), rest
 
     def network(self, model_grid: np.ndarray, words: list[str]):
-        """Return the network's value map for its words (the mean over the map's images)."""
-        images = IMAGES if model_grid.size <= self.mirror_average_cells else IMAGES[:1]
-        code = self.text_code(' '.join(words), images)
-        values, aux = self.model.ground(imaged(model_grid, images), code, True)
-        return averaged(values.numpy(), images), aux
+        """
+        Return the network's value map for its words, and its aux of the map itself.
+
+        Where it is unsure of its best cell on a map it may average (mirror_average_cells,
+        mirror_average_below), the mean over the map and its mirror images.
+        """
+        text = ' '.join(words)
+        values, aux = self.model.ground(imaged(model_grid, IMAGES[:1]), self.text_code(text), True)
+        values = values.numpy()
+        if model_grid.size <= self.mirror_average_cells and (
+            self.mirror_average_below >= 1 or self.certainty(values[0]) < self.mirror_average_below
+        ):
+            mirrors = self.model.ground(
+                imaged(model_grid, IMAGES[1:]), self.text_code(text, IMAGES[1:])
+            )
+            return averaged(np.concatenate([values, mirrors.numpy()]), IMAGES), aux
+        return values[0], aux
 
     def ground_composed(
         self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
@@ -481,6 +506,11 @@ class Grounder:
             return tuple(int(x) for x in np.unravel_index(i, values.shape))
 
         return cell(best), float(p[best]), [(cell(i), float(p[i])) for i in others]
+
+    def certainty(self, values: np.ndarray) -> float:
+        """Return the calibrated probability of the best cell, as judge() gives it."""
+        flat = values.reshape(-1).astype(np.float64) / self.temperature
+        return float(1 / np.exp(flat - flat.max()).sum())
 
     def probability(self, values: np.ndarray, cell: tuple[int, int]) -> float:
         """Return a cell's calibrated probability, as judge() gives the best cell's."""

@@ -63,12 +63,21 @@ def test_bench_writes_every_section(tmp_path):
     assert result['machine']['torch_threads'] == 1
     assert [row['map'] for row in result['sizes']] == ['10x10', '16x16']
     for row in result['sizes']:
-        for way in ('head', 'head_plain', 'ground_cached', 'ground_new', 'forward', 'reference'):
+        ways = ('yardstick', 'head', 'head_plain', 'ground_cached', 'ground_new', 'forward',
+                'reference', 'ground_mirrored')
+        for way in ways:
             assert 0 < row[way]['p50_ms'] <= row[way]['p99_ms'] <= row[way]['max_ms'], way
         assert row['ground_over_head'] == row['ground_cached']['p50_ms'] / row['head']['p50_ms']
+        assert row['ground_over_yardstick'] == (
+            row['ground_cached']['p50_ms'] / row['yardstick']['p50_ms']
+        )
+        # the yardstick, the network and the grounder ran in turn, as many times each
+        assert row['yardstick']['n'] == row['ground_cached']['n'] == row['head']['n']
         assert row['peak_rss_mb'] > 0 and row['reference_peak_rss_mb'] > 0
-        # maps this small are grounded with their three mirror images: the head is timed on four
-        assert row['images'] == 4 and row['ground_one_image']['p50_ms'] > 0
+        # a random network is unsure of every map: it grounds the mirror images too
+        assert row['images'] == 4
+    reading = result['reading']
+    assert reading['words'] == 10 and 0 < reading['p50_ms']
     assert result['throughput']['batch'] == 16 and result['throughput']['maps_per_second'] > 0
     step = result['training_step']
     assert step['batch'] == 4 and step['model'] == 't-rnet-attn'
@@ -76,12 +85,13 @@ def test_bench_writes_every_section(tmp_path):
     ros = result['ros_end_to_end']
     assert ros['requests'] == 5 and 0 < ros['p50_ms'] <= ros['p99_ms']
     assert ros['node_rss_mb_end'] > 0
-    one = result['ros_end_to_end_one_image']
-    assert one['requests'] == 5 and 0 < one['p50_ms'] <= one['p99_ms']
+    mirrored = result['ros_end_to_end_mirrored']
+    assert mirrored['requests'] == 5 and 0 < mirrored['p50_ms'] <= mirrored['p99_ms']
+    assert ros['load_average_at_start'] >= 0 and mirrored['load_average_at_start'] >= 0
     memory = result['memory']
     assert memory['rss_mb_after_110'] > 0 and 'Grounder.ground()' in memory['measured']
     assert set(result['checks']) == set(bench.TARGETS)
-    assert result['checks']['ground_over_head_128x128']['met'] is None  # not measured here
+    assert result['checks']['ground_over_yardstick_128x128']['met'] is None  # not measured
     # the markdown table beside the JSON is the JSON's table
     assert out.with_suffix('.md').read_text() == bench.table(result)
     assert '| 16x16 | 4 |' in bench.table(result)

@@ -274,3 +274,14 @@ def test_grounder_keeps_recent_instructions_only():
     # keyed by what the network reads ("reach cell with star": places.surface)
     assert list(grounder.text_codes) == [first.model_instruction, tree.model_instruction]
     np.testing.assert_array_equal(grounder.ground(grid, 'reach the star').values, first.values)
+
+
+@pytest.mark.parametrize('shape', [(40, 40), (33, 70), (1, 1100), (1100, 1), (2, 600)])
+def test_axial_views_convolved_as_profiles_are_the_joined_views(shape):
+    """Inference convolves a view's row or column profile: the sums training convolves joined."""
+    head = random_model('t-rnet-attn', 5, seed=11, axial=True, far=True).head
+    z1, code, far = torch.randn(2, *shape), torch.randn(2, head.code_size), torch.randn(2, *shape)
+    with torch.no_grad():
+        profiles = head(z1, code, far)
+    joined = head(z1, code, far).detach()  # with gradients: the views joined to the channels
+    torch.testing.assert_close(profiles, joined, atol=1e-5, rtol=1e-5)

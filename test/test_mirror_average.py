@@ -4,7 +4,12 @@
 # license that can be found in the LICENSE file or at
 # https://opensource.org/licenses/MIT.
 
-"""The Grounder's value map is the mean over the map's mirror images, on maps up to a size."""
+"""
+Where the network is unsure, the Grounder's value map is the mean over the map's mirror images.
+
+On maps up to a size (mirror_average_cells), when the map alone leaves the best cell's
+calibrated probability under mirror_average_below.
+"""
 
 import numpy as np
 import pytest
@@ -47,7 +52,7 @@ def test_the_value_map_is_the_mean_over_the_mirror_images(loaded):
     # (a count past one step from an extreme is composed, a shift of the network's map:
     # places.learned_offset; this one the network reads whole)
     text = 'reach the cell to the right of the northernmost rock'
-    got = Grounder(loaded).ground(grid, text)
+    got = Grounder(loaded, mirror_average_below=1).ground(grid, text)  # every map
     single = Grounder(loaded, mirror_average_cells=0)
     want = np.mean(
         [
@@ -71,7 +76,25 @@ def test_maps_over_the_limit_are_grounded_once(loaded):
     grid = np.zeros((12, 12), dtype=np.int64)
     grid[5, 5] = E('star')
     text = 'reach cell two below star'
-    limited = Grounder(loaded, mirror_average_cells=12 * 12 - 1).ground(grid, text)
+    limited = Grounder(loaded, mirror_average_cells=12 * 12 - 1, mirror_average_below=1)
+    limited = limited.ground(grid, text)
     once = Grounder(loaded, mirror_average_cells=0).ground(grid, text)
     np.testing.assert_array_equal(limited.values, once.values)
     assert limited.goal == once.goal == (7, 5)
+
+
+def test_only_an_unsure_map_is_averaged(loaded):
+    """A sure grounding keeps the map's own value map; an unsure one takes the images' mean."""
+    grid = np.zeros((9, 11), dtype=np.int64)
+    grid[2, 3], grid[3, 8], grid[4, 1], grid[7, 2] = E('star'), E('rock'), E('tree'), E('rock')
+    text = 'reach the cell to the right of the northernmost rock'
+    single = Grounder(loaded, mirror_average_cells=0).ground(grid, text)
+    always = Grounder(loaded, mirror_average_below=1).ground(grid, text)
+    sure = single.confidence
+    # under the map's own certainty nothing is averaged; above it, the images are
+    below = Grounder(loaded, mirror_average_below=sure * 0.99).ground(grid, text)
+    above = Grounder(loaded, mirror_average_below=min(1.0, sure * 1.01)).ground(grid, text)
+    np.testing.assert_array_equal(below.values, single.values)
+    np.testing.assert_allclose(above.values, always.values, atol=1e-6)
+    with pytest.raises(ValueError, match='mirror_average_below'):
+        Grounder(loaded, mirror_average_below=1.5)

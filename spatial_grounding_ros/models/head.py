@@ -174,14 +174,34 @@ class OutputHead(nn.Module):
         x = x.contiguous(memory_format=layout)
         for n in range(first, last):
             if views and views.get(n):
-                x = torch.cat([x, *(v.window(*window) for v in views[n])], 1)
-            x = self.convs[n](x)
+                x = self.conv_with_views(self.convs[n], x, views[n], window)
+            else:
+                x = self.convs[n](x)
             if n == 0 and film is not None:
                 scale, shift = film[..., None, None].chunk(2, dim=1)
                 x = x * (1 + scale) + shift
             if n < len(self.convs) - 1:
                 x = F.leaky_relu(x, self.slope, inplace=True)  # the conv's own output
         return x[:, 0] if last == len(self.convs) else x
+
+    @staticmethod
+    def conv_with_views(conv: nn.Conv2d, x: torch.Tensor, views: list, window) -> torch.Tensor:
+        """
+        Run `conv` on x (B, C, h, w) with the views' window of the map joined to its channels.
+
+        A view is constant along a row or a column, so inference convolves its profiles instead
+        (AxialViews.convolved): the same sums, without the 6C map-sized channels, at a sixth
+        of the layer's work on a large map. Training (and maps of up to 32x32 cells, where a
+        few more calls cost more than they save) convolves them joined, as the weights learned;
+        the map's size, not the tile's, decides, so a tiled map is grounded the same way.
+        """
+        if torch.is_grad_enabled() or min(v.cells for v in views) <= 32 * 32:
+            return conv(torch.cat([x, *(v.window(*window) for v in views)], 1))
+        c = x.shape[1]
+        out = F.conv2d(x, conv.weight[:, :c], conv.bias, padding=1)
+        for k, v in enumerate(views):
+            out = out + v.convolved(conv.weight[:, c + k * 6 * c: c + (k + 1) * 6 * c], window)
+        return out
 
 
 class AxialViews:
@@ -198,6 +218,7 @@ class AxialViews:
     """
 
     def __init__(self, x: torch.Tensor):
+        self.cells = x.shape[2] * x.shape[3]  # of the map
         low = x.amin(dim=(2, 3))[..., None]  # (B, C, 1)
         cols, rows = x.amax(dim=2), x.amax(dim=3)  # (B, C, W), (B, C, H)
 
@@ -216,6 +237,43 @@ class AxialViews:
         # south, each for all channels
         order = [row[:, 0], column[:, 0], column[:, 1], column[:, 2], row[:, 1], row[:, 2]]
         return torch.cat(order, 1)
+
+    def convolved(self, weight: torch.Tensor, window) -> torch.Tensor:
+        """
+        Return a 3x3 convolution (zero padding) of window(*window) by `weight` (O, 6C, 3, 3).
+
+        Each view is constant along its row (or column), so at cell (i, j) the kernel's three
+        taps across it add up to one weight: a convolution of the view's profile along the
+        column (or row) with the kernel summed across, except in the window's first and last
+        column (row), where the zero padding drops a tap. (B, O, h, w), without the bias.
+        """
+        top, bottom, left, right = window
+        blocks = weight.unflatten(1, (AXIAL_VIEWS, -1))  # the order of window()'s channels
+        rows = self.by_row[..., top:bottom].flatten(1, 2)  # (B, 3C, h): row, north, south
+        columns = self.by_column[..., left:right].flatten(1, 2)  # (B, 3C, w): column, west, east
+        by_row = across(rows, blocks[:, [0, 4, 5]].flatten(1, 2), right - left, dim=3)
+        by_column = across(columns, blocks[:, [1, 2, 3]].flatten(1, 2), bottom - top, dim=2)
+        return by_row + by_column
+
+
+def across(profile: torch.Tensor, weight: torch.Tensor, n: int, dim: int) -> torch.Tensor:
+    """
+    Convolve a map constant along `dim` by a 3x3 `weight`, as its profile (B, C, m).
+
+    The map is `profile` repeated n times along `dim` (3: each row constant, 2: each column).
+    Taps across `dim` sum to one 1-D kernel; the first and last of the n lose the tap the
+    zero padding covers (one alone, both).
+    """
+    taps = weight if dim == 3 else weight.transpose(2, 3)  # (O, C, along, across)
+    sums = [taps.sum(3), taps[..., 1:].sum(3), taps[..., :2].sum(3), taps[..., 1]]
+    o = weight.shape[0]
+    full, first, last, alone = F.conv1d(profile, torch.cat(sums), padding=1).split(o, 1)
+    if n == 1:
+        out = alone[..., None]
+    else:  # the middle n - 2 as one broadcast
+        middle = full[..., None].expand(-1, -1, -1, n - 2)
+        out = torch.cat([first[..., None], middle, last[..., None]], -1)
+    return out if dim == 3 else out.transpose(2, 3)
 
 
 AXIAL_VIEWS = 6

@@ -205,6 +205,7 @@ class GrounderNode(LifecycleNode):
             table,
             self.param('min_confidence'),
             mirror_average_cells=self.param('mirror_average_cells'),
+            mirror_average_below=self.param('mirror_average_below'),
         )
         self.grounder = grounder
         self.get_logger().info(

@@ -11,7 +11,7 @@ from __future__ import annotations
 from . import convert
 from .node_support import Param
 from ..core.instruction_hold import GOAL_STAMPS
-from ..grounder import DEFAULT_CHECKPOINT, MIRROR_AVERAGE_CELLS
+from ..grounder import DEFAULT_CHECKPOINT, MIRROR_AVERAGE_BELOW, MIRROR_AVERAGE_CELLS
 
 PARAMETERS = (
     Param(
@@ -43,10 +43,19 @@ PARAMETERS = (
     Param(
         'mirror_average_cells',
         MIRROR_AVERAGE_CELLS,
-        'maps of at most this many cells are grounded with their three mirror images too and '
-        'the value maps averaged (steadier goals, four times the work); 0: never',
+        'maps of at most this many cells may be grounded with their three mirror images too and '
+        'the value maps averaged (mirror_average_below says when); 0: never',
         low=0,
         high=4096 * 4096,
+    ),
+    Param(
+        'mirror_average_below',
+        MIRROR_AVERAGE_BELOW,
+        'a map grounded alone whose best cell has a calibrated probability below this is '
+        'grounded with its mirror images too (steadier goals where the model is unsure, at '
+        'twice the work or more; docs/benchmarks.md); 1: every map',
+        low=0.0,
+        high=1.0,
     ),
     Param('max_instruction_chars', 500, 'longer instructions are rejected', low=1, high=100000),
     Param(
