@@ -70,6 +70,8 @@ def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | No
 
 def imaged(grid: np.ndarray, images) -> torch.Tensor:
     """Return the map's `images` (each the axes it flips) as one batch (I, H, W)."""
+    if images == IMAGES[:1]:  # the map as it is
+        return torch.as_tensor(grid, dtype=torch.int64)[None]
     return torch.as_tensor(np.stack([np.flip(grid, axes) for axes in images]))
 
 
@@ -80,7 +82,7 @@ def averaged(values: np.ndarray, images) -> np.ndarray:
 
 def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
     """Return the cell of any of `kinds` nearest `cell` (Euclidean), or None."""
-    where = np.argwhere(np.isin(grid, kinds))
+    where = np.argwhere(grid == kinds[0] if len(kinds) == 1 else np.isin(grid, kinds))
     if not len(where):
         return None
     nearest = where[((where - np.asarray(cell)) ** 2).sum(1).argmin()]
