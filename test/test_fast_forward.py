@@ -285,3 +285,13 @@ def test_axial_views_convolved_as_profiles_are_the_joined_views(shape):
         profiles = head(z1, code, far)
     joined = head(z1, code, far).detach()  # with gradients: the views joined to the channels
     torch.testing.assert_close(profiles, joined, atol=1e-5, rtol=1e-5)
+
+
+def test_the_shared_caches_serve_training_after_inference():
+    """The Grounder grounds in inference mode; a map size it cached first still trains."""
+    vocab, grids, tokens = inputs((13, 17), 12, seed=12)
+    model = random_model('t-rnet-attn', len(vocab), seed=13, axial=True, far=True)
+    with torch.inference_mode():
+        model(grids, tokens)  # fills gradient_maps and pair_distances for 13x17
+    model(grids, tokens).sum().backward()
+    assert all(p.grad is not None for p in model.head.parameters())

@@ -65,11 +65,12 @@ def squared_distances(marks: torch.Tensor, reach: int) -> torch.Tensor:
 @functools.lru_cache(maxsize=16)
 def pair_distances(height: int, width: int, device=None) -> torch.Tensor:
     """(H*W, H*W): the squared distance between every two cells of a map (read only)."""
-    rows, cols = torch.meshgrid(
-        torch.arange(height, device=device), torch.arange(width, device=device), indexing='ij'
-    )
-    cells = torch.stack([rows.flatten(), cols.flatten()], 1).float()
-    return ((cells[:, None] - cells[None]) ** 2).sum(-1)
+    with torch.inference_mode(False):  # kept: a plain tensor, whichever mode first asks
+        rows, cols = torch.meshgrid(
+            torch.arange(height, device=device), torch.arange(width, device=device), indexing='ij'
+        )
+        cells = torch.stack([rows.flatten(), cols.flatten()], 1).float()
+        return ((cells[:, None] - cells[None]) ** 2).sum(-1)
 
 
 def far_map(

@@ -39,9 +39,10 @@ def gradient_maps(height: int, width: int, device=None, cells: float = 0.0) -> t
             return (torch.arange(n, dtype=torch.float32, device=device) - (n - 1) / 2) / cells
         return torch.linspace(-1, 1, n, device=device)
 
-    g1 = ramp(width).expand(height, width)
-    g2 = ramp(height)[:, None].expand(height, width)
-    return torch.stack([g1, g2, torch.ones(height, width, device=device)])
+    with torch.inference_mode(False):  # kept: a plain tensor, whichever mode first asks
+        g1 = ramp(width).expand(height, width)
+        g2 = ramp(height)[:, None].expand(height, width)
+        return torch.stack([g1, g2, torch.ones(height, width, device=device)])
 
 
 class OutputHead(nn.Module):
