@@ -25,7 +25,10 @@ import numpy as np
 
 def footprints(grid: np.ndarray, kind: int) -> list[np.ndarray]:
     """Return each 8-connected group of a kind's cells, as (n, 2) arrays of (row, col)."""
-    left = {(int(r), int(c)) for r, c in np.argwhere(grid == kind)}
+    mask = grid == kind
+    if not touching(mask):  # each cell its own group: a large map's objects, at numpy's pace
+        return list(np.argwhere(mask)[:, None])
+    left = {(int(r), int(c)) for r, c in np.argwhere(mask)}
     groups = []
     while left:
         todo = [left.pop()]
@@ -40,6 +43,17 @@ def footprints(grid: np.ndarray, kind: int) -> list[np.ndarray]:
                         todo.append((r + dr, c + dc))
         groups.append(np.array(sorted(group)))
     return groups
+
+
+def touching(mask: np.ndarray) -> bool:
+    """Say whether any two cells of a mask are 8-neighbours."""
+    m = np.pad(mask, 1)
+    core = m[1:-1, 1:-1]
+    # each pair once: the neighbour to the east, south-west, south and south-east
+    return any(
+        (core & m[1 + dr:m.shape[0] - 1 + dr, 1 + dc:m.shape[1] - 1 + dc]).any()
+        for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1))
+    )
 
 
 def anchor(cells: np.ndarray, side: tuple[int, int]) -> tuple[int, int]:

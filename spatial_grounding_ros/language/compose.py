@@ -138,15 +138,14 @@ class Locator:
                 return None, confidence, words, reason
             anchor = landmark.anchor.name.replace('_', ' ')
             # of several anchors ("the rock next to the house"), the landmark nearest any
-            d = [min(np.hypot(*(centre(c) - centre(a))) for a in anchors) for c in found]
+            d = nearest_distances(centres(found), centres(anchors))
             i, reason = by_distance(d, name, anchor, landmark.pick)
             return (None if i is None else found[i]), confidence, words, reason
         if landmark.pick is None and len(found) > 1:
             return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
         values, _, words, _ = self.network(Place('landmark', landmark))
         best, confidence, _ = self.judge(values)
-        i = int(np.argmin([((c - np.asarray(best)) ** 2).sum(1).min() for c in found]))
-        return found[i], confidence, words, None
+        return found[nearest_to(found, best)], confidence, words, None
 
     def candidates(self, landmark: Landmark):
         """
@@ -194,6 +193,30 @@ def instances(grid: np.ndarray, kind: int, drawn_over_cells: bool) -> list[np.nd
 def centre(cells: np.ndarray) -> np.ndarray:
     """Return a landmark's centre: the mean of its cells (row, col)."""
     return cells.mean(0)
+
+
+def centres(landmarks: list[np.ndarray]) -> np.ndarray:
+    """Return each landmark's centre as (N, 2): a landmark of one cell is that cell."""
+    if all(len(cells) == 1 for cells in landmarks):
+        return np.concatenate(landmarks).astype(np.float64)
+    return np.array([centre(cells) for cells in landmarks])
+
+
+def nearest_to(landmarks: list[np.ndarray], cell: Cell) -> int:
+    """Return the index of the landmark with a cell nearest `cell` (the first of equals)."""
+    if all(len(cells) == 1 for cells in landmarks):
+        return int(((np.concatenate(landmarks) - np.asarray(cell)) ** 2).sum(1).argmin())
+    return int(np.argmin([((c - np.asarray(cell)) ** 2).sum(1).min() for c in landmarks]))
+
+
+def nearest_distances(points: np.ndarray, anchors: np.ndarray, pairs: int = 1 << 20):
+    """Return each point's distance to its nearest anchor (Euclidean), `pairs` at a time."""
+    out = np.empty(len(points))
+    step = max(1, pairs // max(1, len(anchors)))
+    for start in range(0, len(points), step):
+        d = points[start:start + step, None] - anchors[None]
+        out[start:start + step] = np.hypot(d[..., 0], d[..., 1]).min(1)
+    return out
 
 
 def edge_key(cells: np.ndarray, side: str) -> int:
