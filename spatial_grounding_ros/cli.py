@@ -260,7 +260,8 @@ def _extensions():
     """
     Subcommands defined next to the code they drive.
 
-    bench, bags, the suite, honest answers and calibration, natural instructions, ShapeWorld's,
+    bench, bags, the suite, honest answers and calibration, natural instructions, mirror
+    averaging, ShapeWorld's,
     robustness, explain, and the closed-loop demo, which needs rclpy (without it, every other
     subcommand still works).
     """
@@ -273,6 +274,7 @@ def _extensions():
         ground,
         honesty,
         kinds_ablation,
+        mirror,
         natural,
         robustness,
         suite,
@@ -285,6 +287,7 @@ def _extensions():
         ground.register_cli,
         honesty.register_cli,
         natural.register_cli,
+        mirror.register_cli,
         kinds_ablation.register_cli,
         calibration.register_cli,
         shapeworld.register_cli,

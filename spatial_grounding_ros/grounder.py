@@ -129,6 +129,7 @@ class Grounder:
             raise ValueError(f'mirror_average_below must be in 0..1, got {mirror_average_below}')
         self.mirror_average_cells = mirror_average_cells
         self.mirror_average_below = mirror_average_below
+        self.mirror_averaged = 0  # value maps averaged over the mirror images so far
         self.translation = None
         if loaded.entities.domain == 'puddleworld':
             self.translation = Translation(
@@ -360,6 +361,7 @@ class Grounder:
             mirrors = self.model.ground(
                 imaged(model_grid, IMAGES[1:]), self.text_code(text, IMAGES[1:])
             )
+            self.mirror_averaged += 1
             return averaged(np.concatenate([values, mirrors.numpy()]), IMAGES), aux
         return values[0], aux
 

@@ -175,8 +175,12 @@ def totals(rows: list[dict]) -> dict:
 
 
 def run_natural(cases: str | Path = 'dev', checkpoint: str = 'pw_t-rnet-attn',
-                progress: bool = True, detail: bool | None = None) -> dict:
-    """Ground every case of a cases file and score it (per case only when `detail`)."""
+                progress: bool = True, detail: bool | None = None, **grounder_options) -> dict:
+    """
+    Ground every case of a cases file and score it (per case only when `detail`).
+
+    `grounder_options`: more of Grounder.from_checkpoint's arguments (its defaults otherwise).
+    """
     data = load_cases(cases)
     detail = str(cases) != 'held_out' if detail is None else detail
     grounders, names = {}, {}
@@ -185,7 +189,9 @@ def run_natural(cases: str | Path = 'dev', checkpoint: str = 'pw_t-rnet-attn',
         m = data['maps'][case['map']]
         table = m['table']
         if table not in grounders:
-            grounders[table] = Grounder.from_checkpoint(checkpoint, entities=table_path(table))
+            grounders[table] = Grounder.from_checkpoint(
+                checkpoint, entities=table_path(table), **grounder_options
+            )
             names[table] = table_names(table)
         grid = build_grid(m, names[table])
         try:
