@@ -87,14 +87,33 @@ def expected_calibration_error(confidence, correct, bins: int = 10) -> float:
     )
 
 
+# fits of the temperature, each on the groundings the last one's makes (see calibrate)
+CALIBRATION_ROUNDS = 4
+
+
 def calibrate(checkpoint: str, data_dir=DEFAULT_DATA, write: bool = False, progress=True) -> dict:
-    """Fit the checkpoint's temperature; with `write`, store it in its header."""
+    """
+    Fit the checkpoint's temperature; with `write`, store it in its header.
+
+    The temperature decides which maps the Grounder averages over their mirror images (its
+    calibrated certainty), and those averages are what is fitted: from 1, each round fits the
+    groundings the last round's temperature makes, until it stays (at most
+    CALIBRATION_ROUNDS), so the fit does not depend on a temperature the header held.
+    """
     grounder = Grounder.from_checkpoint(checkpoint)
     human = held_out_examples(grounder, data_dir)
-    scored = goal_values(grounder, human + generated_examples(), progress)
-    temperature = fit_temperature(scored)
+    examples = human + generated_examples()
+    temperature, fits = 1.0, []
+    for _ in range(CALIBRATION_ROUNDS):
+        grounder.temperature = temperature
+        scored = goal_values(grounder, examples, progress)
+        temperature = fit_temperature(scored)
+        fits.append(temperature)
+        if len(fits) > 1 and fits[-1] == fits[-2]:
+            break
     result = {
         'temperature': temperature,
+        'rounds': fits,
         'fitted_on': f'{len(human)} held-out {grounder.loaded.header["task"]} examples and '
         f'{len(scored) - len(human)} generated (seed {CALIBRATION_SEED}, 10x10 and 32x32)',
         'nll': float(mean_nll(scored, temperature)),
