@@ -98,3 +98,17 @@ def test_only_an_unsure_map_is_averaged(loaded):
     np.testing.assert_allclose(above.values, always.values, atol=1e-6)
     with pytest.raises(ValueError, match='mirror_average_below'):
         Grounder(loaded, mirror_average_below=1.5)
+
+
+def test_the_mirror_study_scores_each_setting(tmp_path):
+    """`mirror-study`: never averages nothing, every map averages every map the network grounds."""
+    from spatial_grounding_ros.studies.mirror import markdown, run_mirror_study
+
+    result = run_mirror_study(data_dir=tmp_path, sizes=(10,), n=1, progress=False, natural=False)
+    never, unsure, every = result['settings'].values()
+    assert never['suite']['10']['mirrored'] == 0
+    assert every['suite']['10']['mirrored'] >= unsure['suite']['10']['mirrored']
+    assert every['suite']['10']['mirrored'] > 0.8  # all but the picks made on the map alone
+    assert every['human'] == {}  # no data here: the human splits are left out
+    table = markdown(result)
+    assert table.startswith('| | never | below 0.95 (the default) | every map |')
