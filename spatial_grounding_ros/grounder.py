@@ -45,8 +45,9 @@ DEFAULT_CHECKPOINT = 'pw_t-rnet-attn'
 # the map as it is, then its mirror images (the map axes each flips), as training mirrors its
 # human examples (data/augment.py)
 IMAGES = ((), *MIRROR_IMAGES)
-# maps of up to this many cells (128x128) may be grounded with their mirror images too
-MIRROR_AVERAGE_CELLS = 128 * 128
+# maps of up to this many cells (64x64) may be grounded with their mirror images too: on a
+# larger map few groundings are that sure of one cell, and four images are four times the work
+MIRROR_AVERAGE_CELLS = 64 * 64
 # ... when the map alone leaves the network less sure than this of its best cell (calibrated):
 # the images' mean is steadier where it is unsure, and only there (docs/benchmarks.md has
 # what it costs and what it earns)
