@@ -215,15 +215,9 @@ def size_latency(grounder: Grounder, size: int, args, reference_s_per_cell: floa
 
 def images_grounded(grounder: Grounder, grid: np.ndarray, text: str) -> int:
     """Return how many images of the map the grounder runs for an instruction (1 or 4)."""
-    if grid.size > grounder.mirror_average_cells:
-        return 1
-    if grounder.mirror_average_below >= 1:
-        return len(IMAGES)
-    limit, grounder.mirror_average_cells = grounder.mirror_average_cells, 0
-    alone = grounder.ground(grid, text)
-    grounder.mirror_average_cells = limit
-    sure = grounder.certainty(alone.values) >= grounder.mirror_average_below
-    return 1 if sure else len(IMAGES)
+    before = grounder.mirror_averaged
+    grounder.ground(grid, text)
+    return len(IMAGES) if grounder.mirror_averaged > before else 1
 
 
 def reading(grounder: Grounder, budget_s: float) -> dict:
