@@ -114,8 +114,9 @@ class Grounder:
         value map whose best cell has a calibrated chance below `mirror_average_below` is
         replaced by the mean of the model's over the map and its three mirror images, each
         read with its direction words swapped (IMAGES; the three in one batch): where the
-        model is unsure of a cell, its mirror images seldom are unsure the same way (cells 0:
-        never; below 1: every map). The text codes of the last
+        model is unsure of a cell, its mirror images seldom are unsure the same way
+        (`mirror_average_cells` 0: never; `mirror_average_below` 1: every map up to that
+        size). The text codes of the last
         `cached_instructions` instructions are kept (t-RNetAttn: the relation table over all
         kinds), since a node grounds the same instruction on new maps.
         """
