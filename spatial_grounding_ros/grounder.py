@@ -26,8 +26,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from .core.confidence import certainty, judged, mass_around, probability
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
-from .core.footprints import footprints, reduce_footprints
+from .core.footprints import nearest_cell, reduce_footprints
 from .core.grounding import Grounding, REASONS  # noqa: F401 (REASONS: the API's)
 from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
@@ -58,9 +59,6 @@ MIRROR_AVERAGE_BELOW = 0.95
 # trade-off): under it a grounding declines, low-confidence
 DEFAULT_MIN_CONFIDENCE = 0.1
 
-# how many next-best cells a grounding reports
-ALTERNATIVES = 3
-
 
 def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | None:
     """Return an entity table given as a table, a YAML path or None."""
@@ -79,15 +77,6 @@ def imaged(grid: np.ndarray, images) -> torch.Tensor:
 def averaged(values: np.ndarray, images) -> np.ndarray:
     """Return the mean of the images' value maps (I, H, W), each flipped back."""
     return np.mean([np.flip(v, axes) for v, axes in zip(values, images)], 0)
-
-
-def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
-    """Return the cell of any of `kinds` nearest `cell` (Euclidean), or None."""
-    where = np.argwhere(grid == kinds[0] if len(kinds) == 1 else np.isin(grid, kinds))
-    if not len(where):
-        return None
-    nearest = where[((where - np.asarray(cell)) ** 2).sum(1).argmin()]
-    return int(nearest[0]), int(nearest[1])
 
 
 class Grounder:
@@ -296,10 +285,11 @@ class Grounder:
         )
         if approach is not None:
             goal, referent, reason = approach.goal, approach.referent, reason or approach.reason
-            alternatives = [(cell, self.probability(values, cell)) for cell in approach.others]
+            t = self.temperature
+            alternatives = [(cell, probability(values, cell, t)) for cell in approach.others]
             # the robot stops beside the landmark, whichever side the network favoured: the
             # chance that it is the place meant is the mass on the landmark and around it
-            confidence = self.around(values, grid, referent)
+            confidence = mass_around(values, grid, referent, self.temperature)
         beside = approach is not None and approach.goal is not None
         return self.grounding(grid, instruction, ref, values, aux, words, goal, best, confidence,
                               reason, alternatives, referent, beside)
@@ -358,7 +348,8 @@ class Grounder:
         values, aux = self.model.ground(imaged(model_grid, IMAGES[:1]), self.text_code(text), True)
         values = values.numpy()
         if model_grid.size <= self.mirror_average_cells and (
-            self.mirror_average_below >= 1 or self.certainty(values[0]) < self.mirror_average_below
+            self.mirror_average_below >= 1
+            or certainty(values[0], self.temperature) < self.mirror_average_below
         ):
             mirrors = self.model.ground(
                 imaged(model_grid, IMAGES[1:]), self.text_code(text, IMAGES[1:])
@@ -501,43 +492,7 @@ class Grounder:
 
     def judge(self, values: np.ndarray):
         """Return the best cell, its calibrated probability, and the next best with theirs."""
-        flat = values.reshape(-1).astype(np.float64) / self.temperature
-        p = np.exp(flat - flat.max())
-        p /= p.sum()
-        best = int(np.argmax(flat))  # the first of equal maxima, as numpy's argmax
-        k = min(ALTERNATIVES + 1, p.size)
-        top = np.argpartition(-p, k - 1)[:k]
-        others = [i for i in top[np.argsort(-p[top], kind='stable')] if i != best][:ALTERNATIVES]
-
-        def cell(i):
-            return tuple(int(x) for x in np.unravel_index(i, values.shape))
-
-        return cell(best), float(p[best]), [(cell(i), float(p[i])) for i in others]
-
-    def certainty(self, values: np.ndarray) -> float:
-        """Return the calibrated probability of the best cell, as judge() gives it."""
-        flat = values.reshape(-1).astype(np.float64) / self.temperature
-        return float(1 / np.exp(flat - flat.max()).sum())
-
-    def probability(self, values: np.ndarray, cell: tuple[int, int]) -> float:
-        """Return a cell's calibrated probability, as judge() gives the best cell's."""
-        flat = values.astype(np.float64) / self.temperature
-        return float(np.exp(flat[cell] - flat.max()) / np.exp(flat - flat.max()).sum())
-
-    def around(self, values: np.ndarray, grid: np.ndarray, cell: tuple[int, int]) -> float:
-        """Return the calibrated mass on the landmark at `cell` and the cells touching it."""
-        groups = footprints(grid, int(grid[cell]))
-        [footprint] = [f for f in groups if tuple(cell) in map(tuple, f)]
-        near = np.zeros(grid.shape, dtype=bool)
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rows, cols = footprint[:, 0] + dr, footprint[:, 1] + dc
-                h, w = grid.shape
-                inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
-                near[rows[inside], cols[inside]] = True
-        flat = values.astype(np.float64) / self.temperature
-        p = np.exp(flat - flat.max())
-        return float(p[near].sum() / p.sum())
+        return judged(values, self.temperature)
 
     def named(self, mentions: list[Mention]) -> list[str]:
         """Return the table's names of the landmarks mentioned, each once, in order."""

@@ -140,6 +140,7 @@ def readme_section(heading: str) -> str:
         ('Results: clear references', 'suite.md'),
         ('Results: clear references', 'ablation.md'),
         ('Benchmarks', 'bench.md'),
+        ('Mirror averaging', 'mirror.md'),
         ('Results: ShapeWorld', 'shapeworld.md'),
         ('Results: robustness', 'robustness.md'),
         ('Results: your own landmarks', 'landmarks.md'),
@@ -181,6 +182,14 @@ def same_number(cell: str, value: float) -> bool:
     """`cell` is `value` written with the cell's own number of decimals."""
     decimals = len(cell.partition('.')[2])
     return cell == f'{value:.{decimals}f}'
+
+
+def test_mirror_table_is_the_json():
+    """results/mirror.md is the table `spatial-grounding mirror-study` makes of mirror.json."""
+    from spatial_grounding_ros.studies import mirror
+
+    result = json.loads((RESULTS / 'mirror.json').read_text())
+    assert (RESULTS / 'mirror.md').read_text() == mirror.markdown(result)
 
 
 def test_value_map_table_is_the_json():

@@ -95,3 +95,12 @@ def reduce_footprints(
 def side_of(offset: tuple[int, int]) -> tuple[int, int]:
     """Return an offset's sign per axis: the side of a landmark it leaves on."""
     return int(np.sign(offset[0])), int(np.sign(offset[1]))
+
+
+def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
+    """Return the cell of any of `kinds` nearest `cell` (Euclidean), or None."""
+    where = np.argwhere(grid == kinds[0] if len(kinds) == 1 else np.isin(grid, kinds))
+    if not len(where):
+        return None
+    nearest = where[((where - np.asarray(cell)) ** 2).sum(1).argmin()]
+    return int(nearest[0]), int(nearest[1])

@@ -30,7 +30,6 @@ import functools
 import json
 import os
 from pathlib import Path
-import platform
 import time
 from typing import Callable
 
@@ -38,7 +37,9 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from .measure import peak_rss_mb, percentiles, reset_peak_rss, rss_mb
+from .measure import (
+    machine, peak_rss_mb, reset_peak_rss, rss_mb, timed, timed_together, yardstick
+)
 from ..data.generator import generate, global_goals, local_goals, random_grid
 from ..grounder import DEFAULT_CHECKPOINT, Grounder, IMAGES
 from ..models.config import ModelConfig
@@ -63,44 +64,6 @@ TARGETS = {
 TEN_WORDS = 'two cells north-east of the second rock from the left'
 
 
-def yardstick() -> torch.nn.Module:
-    """
-    Return the fixed yardstick: a paper-sized output network on one map, in eval mode.
-
-    3x3 convolutions of 2, 8, 16, 32, 16, 8 and 1 channels with leaky ReLUs between: the
-    shape of the output network of the paper's code, on the map's two gradient channels. Its
-    time, taken in the same run, makes the grounder's a ratio that holds across machines and
-    the VM's fast and slow phases.
-    """
-    torch.manual_seed(0)
-    channels = (2, 8, 16, 32, 16, 8, 1)
-    layers = []
-    for a, b in zip(channels[:-1], channels[1:]):
-        layers += [torch.nn.Conv2d(a, b, 3, padding=1), torch.nn.LeakyReLU(0.01)]
-    return torch.nn.Sequential(*layers[:-1]).eval()
-
-
-def machine() -> dict:
-    model = next(
-        (
-            line.split(':', 1)[1].strip()
-            for line in open('/proc/cpuinfo')
-            if line.startswith('model name')
-        ),
-        platform.processor(),
-    )
-    return {
-        'cpu': model,
-        'cores': os.cpu_count(),
-        'usable_cores': len(os.sched_getaffinity(0)),
-        'torch_threads': torch.get_num_threads(),
-        'torch': torch.__version__,
-        'python': platform.python_version(),
-        'platform': platform.platform(),
-        'load_average_at_start': list(os.getloadavg()),
-    }
-
-
 def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
     """
     Return a generated PuddleWorld-style `size` x `size` grid with one of its instructions.
@@ -113,33 +76,6 @@ def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
         goals = global_goals(grid) or local_goals(grid)
         if goals:
             return grid, goals[0][0]
-
-
-def timed(call, budget_s: float, max_reps: int, desc: str) -> dict:
-    """Percentiles of `call` over as many runs as fit `budget_s` (3 to max_reps)."""
-    return timed_together({desc: call}, budget_s, max_reps, desc)[desc]
-
-
-def timed_together(calls: dict, budget_s: float, max_reps: int, desc: str) -> dict:
-    """
-    Percentiles of each of `calls` ({name: call}), their runs taken in turn.
-
-    One run of each after another, so a ratio of two compares them in the same phase of a
-    shared machine. As many rounds as fit `budget_s` (3 to max_reps).
-    """
-    for call in calls.values():
-        call()  # warm-up: the first call pays set-up costs
-    start = time.perf_counter()
-    for call in calls.values():
-        call()  # the time of one round sets the count
-    reps = int(min(max_reps, max(3, budget_s / (time.perf_counter() - start))))
-    times = {name: [] for name in calls}
-    for _ in tqdm(range(reps), desc=desc, leave=False):
-        for name, call in calls.items():
-            t0 = time.perf_counter()
-            call()
-            times[name].append(time.perf_counter() - t0)
-    return {name: percentiles(t) for name, t in times.items()}
 
 
 @torch.no_grad()

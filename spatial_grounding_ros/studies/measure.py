@@ -5,7 +5,7 @@
 # https://opensource.org/licenses/MIT.
 
 """
-Latency percentiles and process memory, for `spatial-grounding bench` and its ROS half.
+Timing, the fixed yardstick and process memory, for `spatial-grounding bench` and its ROS half.
 
 Imports nothing of the package, so bench.py and ros/bench_ros.py can both use it without
 importing each other (test_layers.py forbids the cycle). Memory is read from Linux /proc.
@@ -13,7 +13,13 @@ importing each other (test_layers.py forbids the cycle). Memory is read from Lin
 
 from __future__ import annotations
 
+import os
+import platform
+import time
+
 import numpy as np
+import torch
+from tqdm import tqdm
 
 
 def percentiles(seconds: list[float]) -> dict:
@@ -51,3 +57,68 @@ def reset_peak_rss() -> None:
 def peak_rss_mb() -> float:
     """Return this process's peak RSS since the last reset_peak_rss(), in MB."""
     return status_mb('VmHWM')
+
+
+def timed(call, budget_s: float, max_reps: int, desc: str) -> dict:
+    """Percentiles of `call` over as many runs as fit `budget_s` (3 to max_reps)."""
+    return timed_together({desc: call}, budget_s, max_reps, desc)[desc]
+
+
+def timed_together(calls: dict, budget_s: float, max_reps: int, desc: str) -> dict:
+    """
+    Percentiles of each of `calls` ({name: call}), their runs taken in turn.
+
+    One run of each after another, so a ratio of two compares them in the same phase of a
+    shared machine. As many rounds as fit `budget_s` (3 to max_reps).
+    """
+    for call in calls.values():
+        call()  # warm-up: the first call pays set-up costs
+    start = time.perf_counter()
+    for call in calls.values():
+        call()  # the time of one round sets the count
+    reps = int(min(max_reps, max(3, budget_s / (time.perf_counter() - start))))
+    times = {name: [] for name in calls}
+    for _ in tqdm(range(reps), desc=desc, leave=False):
+        for name, call in calls.items():
+            t0 = time.perf_counter()
+            call()
+            times[name].append(time.perf_counter() - t0)
+    return {name: percentiles(t) for name, t in times.items()}
+
+
+def yardstick() -> torch.nn.Module:
+    """
+    Return the fixed yardstick: a paper-sized output network on one map, in eval mode.
+
+    3x3 convolutions of 2, 8, 16, 32, 16, 8 and 1 channels with leaky ReLUs between: the
+    shape of the output network of the paper's code, on the map's two gradient channels. Its
+    time, taken in the same run, makes the grounder's a ratio that holds across machines and
+    the VM's fast and slow phases.
+    """
+    torch.manual_seed(0)
+    channels = (2, 8, 16, 32, 16, 8, 1)
+    layers = []
+    for a, b in zip(channels[:-1], channels[1:]):
+        layers += [torch.nn.Conv2d(a, b, 3, padding=1), torch.nn.LeakyReLU(0.01)]
+    return torch.nn.Sequential(*layers[:-1]).eval()
+
+
+def machine() -> dict:
+    model = next(
+        (
+            line.split(':', 1)[1].strip()
+            for line in open('/proc/cpuinfo')
+            if line.startswith('model name')
+        ),
+        platform.processor(),
+    )
+    return {
+        'cpu': model,
+        'cores': os.cpu_count(),
+        'usable_cores': len(os.sched_getaffinity(0)),
+        'torch_threads': torch.get_num_threads(),
+        'torch': torch.__version__,
+        'python': platform.python_version(),
+        'platform': platform.platform(),
+        'load_average_at_start': list(os.getloadavg()),
+    }
