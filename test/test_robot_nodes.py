@@ -297,7 +297,8 @@ def test_the_mapper_outlives_bad_markers_and_huge_maps(ros_context, tmp_path):
         )
         probe.map_pub.publish(office.slam_message())
         warn = DiagnosticStatus.WARN
-        assert graph.wait_for(lambda: probe.said('landmarks', warn, "marker 'landmarks'/0"))
+        # the one-shot WARN may go out before /diagnostics matched; the 1 Hz status keeps it
+        assert graph.wait_for(lambda: probe.said('status', warn, "marker 'landmarks'/0"))
         # the other markers still count: all but the desk
         assert graph.wait_for(
             lambda: probe.grid() is not None and (probe.grid() == office.FRIDGE).sum() == 1
@@ -338,6 +339,14 @@ def test_the_mapper_outlives_bad_markers_and_huge_maps(ros_context, tmp_path):
         assert graph.wait_for(
             lambda: len(probe.entity_maps) > count
             and np.array_equal(probe.grid(), office.EXPECTED)
+        )
+        # clean markers: the status is OK again
+        clean_from = len(probe.diagnostics)
+        assert graph.wait_for(
+            lambda: any(
+                s.name.endswith(': status') and s.level == DiagnosticStatus.OK
+                for s in probe.diagnostics[clean_from:]
+            )
         )
         assert process.poll() is None, 'the mapper died'
         assert peak_rss_mb(process) < 1024

@@ -163,6 +163,9 @@ class EntityMapperNode(LifecycleNode):
         self.markers: dict[tuple[str, int], Landmark] = {}
         self.map_msg: OccupancyGrid | None = None
         self.slam: np.ndarray | None = None
+        # the last landmark problems, kept in the 1 Hz status: a WARN sent once at start-up (a
+        # latched bad marker) is lost to a monitor that matched /diagnostics a moment later
+        self.skipped_warning = self.left_out_warning = ''
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 100)
         publish_status(self, self.diagnostics_pub, self.status)
         autostart(self)
@@ -181,6 +184,9 @@ class EntityMapperNode(LifecycleNode):
         }
         if self.table is None and self.configure_error:
             return DiagnosticStatus.WARN, f'configure failed: {self.configure_error}', values
+        warnings = [w for w in (self.skipped_warning, self.left_out_warning) if w]
+        if warnings:
+            return DiagnosticStatus.WARN, f'{values["state"]}; ' + '; '.join(warnings), values
         return DiagnosticStatus.OK, values['state'], values
 
     # --- lifecycle transitions
@@ -265,6 +271,7 @@ class EntityMapperNode(LifecycleNode):
         destroy_entities(self, self.topics)
         self.topics, self.table, self.fixed, self.markers = [], None, [], {}
         self.map_msg = self.slam = None
+        self.skipped_warning = self.left_out_warning = ''
 
     def destroy_node(self) -> None:
         self.release()
@@ -324,12 +331,12 @@ class EntityMapperNode(LifecycleNode):
                 except ValueError as exc:  # the rest of the array still counts
                     self.markers.pop(key, None)
                     skipped.append(str(exc))
+        self.skipped_warning = (
+            f'skipped {len(skipped)} bad markers: ' + '; '.join(skipped[:10]) if skipped else ''
+        )
         if skipped:
             self.report(
-                'landmarks',
-                DiagnosticStatus.WARN,
-                f'skipped {len(skipped)} bad markers: ' + '; '.join(skipped[:10]),
-                skipped=len(skipped),
+                'landmarks', DiagnosticStatus.WARN, self.skipped_warning, skipped=len(skipped)
             )
         self.publish()
 
@@ -382,12 +389,13 @@ class EntityMapperNode(LifecycleNode):
         msg.data = array.array('b', grid.astype(np.int8).tobytes())
         self.entity_pub.publish(msg)
         landmarks = len(self.fixed) + len(self.markers)
+        self.left_out_warning = (
+            f'left out {len(problems)} of {landmarks} landmarks: ' + '; '.join(problems)
+            if problems
+            else ''
+        )
         if problems:
-            self.report(
-                'landmarks',
-                DiagnosticStatus.WARN,
-                f'left out {len(problems)} of {landmarks} landmarks: ' + '; '.join(problems),
-            )
+            self.report('landmarks', DiagnosticStatus.WARN, self.left_out_warning)
         self.report(
             'entity_map',
             DiagnosticStatus.OK,
