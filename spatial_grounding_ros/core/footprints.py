@@ -24,36 +24,70 @@ import numpy as np
 
 
 def footprints(grid: np.ndarray, kind: int) -> list[np.ndarray]:
-    """Return each 8-connected group of a kind's cells, as (n, 2) arrays of (row, col)."""
-    mask = grid == kind
-    if not touching(mask):  # each cell its own group: a large map's objects, at numpy's pace
-        return list(np.argwhere(mask)[:, None])
-    left = {(int(r), int(c)) for r, c in np.argwhere(mask)}
-    groups = []
-    while left:
-        todo = [left.pop()]
-        group = []
-        while todo:
-            r, c = todo.pop()
-            group.append((r, c))
-            for dr in (-1, 0, 1):
-                for dc in (-1, 0, 1):
-                    if (r + dr, c + dc) in left:
-                        left.remove((r + dr, c + dc))
-                        todo.append((r + dr, c + dc))
-        groups.append(np.array(sorted(group)))
-    return groups
+    """
+    Return each 8-connected group of a kind's cells, as (n, 2) arrays of (row, col).
+
+    The groups come in the order of their first cell (row by row), each group's cells in
+    that order too.
+    """
+    cells, roots = _groups(grid == kind)
+    if roots is None:  # each cell its own group
+        return list(cells[:, None])
+    order = np.argsort(roots, kind='stable')  # by group, each group's cells in row order
+    starts = np.flatnonzero(np.diff(roots[order], prepend=-1))
+    return np.split(cells[order], starts[1:])
 
 
-def touching(mask: np.ndarray) -> bool:
-    """Say whether any two cells of a mask are 8-neighbours."""
-    m = np.pad(mask, 1)
-    core = m[1:-1, 1:-1]
+def count_footprints(grid: np.ndarray, kind: int) -> int:
+    """Return how many 8-connected groups of a kind's cells a map holds."""
+    cells, roots = _groups(grid == kind)
+    return len(cells) if roots is None else int((roots == np.arange(len(roots))).sum())
+
+
+def _groups(mask: np.ndarray):
+    """
+    Return a mask's cells (n, 2), row by row, and each cell's group: its first cell's index.
+
+    The group is None when no two cells touch. Groups are joined in numpy, a few rounds of
+    hooking each group onto the lowest one it touches and then following the hooks: a large
+    map's objects cost numpy's pace, not one Python step per cell.
+    """
+    cells = np.argwhere(mask)
+    if len(cells) < 2:
+        return cells, None
+    index = np.full(mask.shape, -1, dtype=np.int64)
+    index[cells[:, 0], cells[:, 1]] = np.arange(len(cells))
+    a, b = _touching_pairs(index)
+    if not len(a):
+        return cells, None
+    root = np.arange(len(cells))
+    while True:
+        ra, rb = root[a], root[b]
+        low, high = np.minimum(ra, rb), np.maximum(ra, rb)
+        apart = low != high
+        if not apart.any():
+            return cells, root
+        np.minimum.at(root, high[apart], low[apart])  # each hooked root onto a lower one
+        while True:  # follow the hooks until every cell holds its group's root
+            hop = root[root]
+            if np.array_equal(hop, root):
+                break
+            root = hop
+
+
+def _touching_pairs(index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the pairs of cells (their indices, -1 none) that are 8-neighbours, each once."""
+    h, w = index.shape
+    a_parts, b_parts = [], []
     # each pair once: the neighbour to the east, south-west, south and south-east
-    return any(
-        (core & m[1 + dr:m.shape[0] - 1 + dr, 1 + dc:m.shape[1] - 1 + dc]).any()
-        for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1))
-    )
+    for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
+        c0, c1 = max(0, -dc), w - max(0, dc)
+        a = index[0:h - dr, c0:c1]
+        b = index[dr:h, c0 + dc:c1 + dc]
+        both = (a >= 0) & (b >= 0)
+        a_parts.append(a[both])
+        b_parts.append(b[both])
+    return np.concatenate(a_parts), np.concatenate(b_parts)
 
 
 def anchor(cells: np.ndarray, side: tuple[int, int]) -> tuple[int, int]:

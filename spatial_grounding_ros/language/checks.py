@@ -270,8 +270,10 @@ def ambiguity(
     (EntityTable.has_footprints); if not, each cell is one for the extremes, as the grounder
     and the generator take them. `offsets`: the mentions' offsets, as map_reason takes them.
     """
+    if len({x.kind for x in mentions}) > 1:
+        return None
     count = count_objects(grid, m.kind)
-    if len({x.kind for x in mentions}) > 1 or count < 2:
+    if count < 2:
         return None
     before, after = _neighbour_words(words, m)
     if set(after) & CLAUSES:

@@ -26,7 +26,7 @@ import numpy as np
 from rapidfuzz.distance import OSA
 
 from ..core.entities import EntityTable
-from ..core.footprints import footprints
+from ..core.footprints import count_footprints
 from ..core.text import tokenize
 
 # only a name this long is read through a typo: shorter ones are one edit from too many words
@@ -220,7 +220,7 @@ def count_objects(grid: np.ndarray, kind: int) -> int:
 
     A landmark drawn over several cells (a robot map's footprint) is one landmark.
     """
-    return len(footprints(grid, kind))
+    return count_footprints(grid, kind)
 
 
 @dataclass(frozen=True)

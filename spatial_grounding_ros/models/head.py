@@ -201,7 +201,7 @@ class OutputHead(nn.Module):
         c = x.shape[1]
         out = F.conv2d(x, conv.weight[:, :c], conv.bias, padding=1)
         for k, v in enumerate(views):
-            out = out + v.convolved(conv.weight[:, c + k * 6 * c: c + (k + 1) * 6 * c], window)
+            out += v.convolved(conv.weight[:, c + k * 6 * c: c + (k + 1) * 6 * c], window)
         return out
 
 
@@ -220,8 +220,7 @@ class AxialViews:
 
     def __init__(self, x: torch.Tensor):
         self.cells = x.shape[2] * x.shape[3]  # of the map
-        low = x.amin(dim=(2, 3))[..., None]  # (B, C, 1)
-        cols, rows = x.amax(dim=2), x.amax(dim=3)  # (B, C, W), (B, C, H)
+        low, cols, rows = extremes(x)
 
         def beyond(profile: torch.Tensor) -> torch.Tensor:
             """Max over the entries before each one along the last axis (exclusive prefix max)."""
@@ -246,35 +245,72 @@ class AxialViews:
         Each view is constant along its row (or column), so at cell (i, j) the kernel's three
         taps across it add up to one weight: a convolution of the view's profile along the
         column (or row) with the kernel summed across, except in the window's first and last
-        column (row), where the zero padding drops a tap. (B, O, h, w), without the bias.
+        column (row), where the zero padding drops a tap. (B, O, h, w), without the bias: the
+        row views' part plus the column views', one outer sum of their profiles.
         """
         top, bottom, left, right = window
         blocks = weight.unflatten(1, (AXIAL_VIEWS, -1))  # the order of window()'s channels
         rows = self.by_row[..., top:bottom].flatten(1, 2)  # (B, 3C, h): row, north, south
         columns = self.by_column[..., left:right].flatten(1, 2)  # (B, 3C, w): column, west, east
-        by_row = across(rows, blocks[:, [0, 4, 5]].flatten(1, 2), right - left, dim=3)
-        by_column = across(columns, blocks[:, [1, 2, 3]].flatten(1, 2), bottom - top, dim=2)
-        return by_row + by_column
+        by_row = across(rows, blocks[:, [0, 4, 5]].flatten(1, 2))  # (B, O, h, 4)
+        # a column view's taps along the rows are the kernel's rows: transposed
+        by_column = across(columns, blocks[:, [1, 2, 3]].flatten(1, 2).transpose(2, 3))
+        return outer_sum(by_row, by_column)
 
 
-def across(profile: torch.Tensor, weight: torch.Tensor, n: int, dim: int) -> torch.Tensor:
+def extremes(x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """
-    Convolve a map constant along `dim` by a 3x3 `weight`, as its profile (B, C, m).
+    Return x's (B, C, H, W) minimum (B, C, 1), column maxima (B, C, W) and row maxima (B, C, H).
 
-    The map is `profile` repeated n times along `dim` (3: each row constant, 2: each column).
-    Taps across `dim` sum to one 1-D kernel; the first and last of the n lose the tap the
-    zero padding covers (one alone, both).
+    At inference a channels-last x is reduced along its own layout (the reductions across the
+    channels' stride are ten times slower at 512x512); the same values, maxima being exact.
+    Training keeps amax: its gradient splits among equal maxima, as the weights learned.
     """
-    taps = weight if dim == 3 else weight.transpose(2, 3)  # (O, C, along, across)
-    sums = [taps.sum(3), taps[..., 1:].sum(3), taps[..., :2].sum(3), taps[..., 1]]
+    plain = x.is_contiguous() or not x.is_contiguous(memory_format=torch.channels_last)
+    if torch.is_grad_enabled() or plain:
+        return x.amin(dim=(2, 3))[..., None], x.amax(dim=2), x.amax(dim=3)
+    cells = x.permute(0, 2, 3, 1)  # (B, H, W, C), contiguous
+    low = cells.amin(1).amin(1)[..., None]
+    cols = cells.amax(1).transpose(1, 2)
+    rows = F.max_pool2d(x, (1, x.shape[3]))[..., 0]
+    return low, cols, rows
+
+
+def across(profile: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
+    """
+    Convolve a profile (B, C, m) by a 3x3 `weight` (O, C, along, across): (B, O, m, 4).
+
+    The map is the profile repeated across (a row view: along the rows, repeated over the
+    columns). Taps across sum to one 1-D kernel; the first and last cells across lose the tap
+    the zero padding covers, and a map one cell across loses both. The four: an inner cell
+    across, the first, the last, a cell alone.
+    """
+    sums = [weight.sum(3), weight[..., 1:].sum(3), weight[..., :2].sum(3), weight[..., 1]]
     o = weight.shape[0]
-    full, first, last, alone = F.conv1d(profile, torch.cat(sums), padding=1).split(o, 1)
-    if n == 1:
-        out = alone[..., None]
-    else:  # the middle n - 2 as one broadcast
-        middle = full[..., None].expand(-1, -1, -1, n - 2)
-        out = torch.cat([first[..., None], middle, last[..., None]], -1)
-    return out if dim == 3 else out.transpose(2, 3)
+    return F.conv1d(profile, torch.cat(sums), padding=1).unflatten(1, (4, o)).permute(0, 2, 3, 1)
+
+
+def outer_sum(by_row: torch.Tensor, by_column: torch.Tensor) -> torch.Tensor:
+    """
+    Return the (B, O, h, w) sum of a row part and a column part given as across()'s four.
+
+    A row part's value at (i, j) is its i-th entry's inner one for j inner, its first or last
+    at the edge columns (alone: one column); a column part's the same, rows and columns
+    swapped. The inner cells are one broadcast sum, the border rows and columns set after.
+    """
+    h, w = by_row.shape[2], by_column.shape[2]
+
+    def which(n: int) -> list[int]:  # across()'s entry for each of n cells across
+        return [3] if n == 1 else [1, *[0] * (n - 2), 2]
+
+    if h < 3 or w < 3:  # a thin window: each part in full
+        return by_row[..., which(w)] + by_column[..., which(h)].transpose(2, 3)
+    out = by_row[..., 0, None] + by_column[..., None, :, 0]
+    out[..., 0, :] = by_row[..., 0, which(w)] + by_column[..., 1]
+    out[..., -1, :] = by_row[..., -1, which(w)] + by_column[..., 2]
+    out[..., :, 0] = by_row[..., 1] + by_column[..., 0, which(h)]
+    out[..., :, -1] = by_row[..., 2] + by_column[..., -1, which(h)]
+    return out
 
 
 AXIAL_VIEWS = 6

@@ -207,24 +207,33 @@ class TRNet(EntityRows, nn.Module):
         kinds, relations = code.kinds, code.relations  # (B or 1, Ki * Kj, P)
         n_rows, p = relations.shape[1:]
         radius = self.cfg.radius
-        # each pair's (kind_i, kind_j) row, i * Kj + j, with j the off-map row past the border
+        # each pair's (kind_i, kind_j) row, i * Kj + j, with j the off-map row past the border:
+        # one (B, H, W) map of rows per offset
         n_kinds = kinds.shape[-1]
         centre = kind_rows(grids, kinds, self.phi.embed.num_embeddings)  # (B, N)
         around = F.pad(centre.view(b, h, w), (radius,) * 4, value=n_kinds)
-        neighbours = torch.stack(shifted(around, radius), -1).view(b, h * w, p)
-        pairs = centre[..., None] * (n_kinds + 1) + neighbours  # (B, N, P)
-        # one gather from the flattened table: the pair's row * P + its offset
-        index = (pairs * p + torch.arange(p, device=grids.device)).view(b, -1)
-        r = relations.flatten(1).expand(b, -1).gather(1, index)
-        z1 = r.view(b, h * w, p).amax(-1).view(b, h, w)
+        first = centre.view(b, h, w) * (n_kinds + 1)
+        pairs = [first + neighbour for neighbour in shifted(around, radius)]
+        table = relations.flatten(1).expand(b, -1)  # a pair's row * P + its offset
+        if torch.is_grad_enabled():
+            # one gather of all offsets and amax, whose gradient splits among equal maxima
+            index = (torch.stack(pairs, -1) * p + torch.arange(p, device=grids.device)).view(b, -1)
+            z1 = table.gather(1, index).view(b, h * w, p).amax(-1).view(b, h, w)
+        else:  # offset by offset: the same maxima without (B, N, P) indices, 4x faster at 512^2
+            z1 = None
+            for offset, pair in enumerate(pairs):
+                r = table.gather(1, (pair * p + offset).view(b, -1))
+                z1 = r if z1 is None else torch.maximum(z1, r, out=z1)
+            z1 = z1.view(b, h, w)
         far = None if code.far is None else self.far_relation(grids, kinds, code.far, centre)
         values = self.head(z1, code.head.expand(b, -1), far)
         word_attention = None
         if return_aux and code.attention is not None:
             # the mean over the map's pairs: each kind pair's attention times its pair count
-            if b > 1:
-                pairs = pairs + torch.arange(b, device=grids.device)[:, None, None] * n_rows
-            counts = torch.bincount(pairs.flatten(), minlength=b * n_rows).to(relations.dtype)
+            maps = torch.arange(b, device=grids.device)[:, None, None] * n_rows
+            counts = sum(
+                torch.bincount((pair + maps).flatten(), minlength=b * n_rows) for pair in pairs
+            ).to(relations.dtype)
             word_attention = (counts.view(b, 1, n_rows) @ code.attention.expand(b, -1, -1))[
                 :, 0
             ] / (p * h * w)
