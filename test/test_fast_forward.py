@@ -295,3 +295,20 @@ def test_the_shared_caches_serve_training_after_inference():
         model(grids, tokens)  # fills gradient_maps and pair_distances for 13x17
     model(grids, tokens).sum().backward()
     assert all(p.grad is not None for p in model.head.parameters())
+
+
+@pytest.mark.parametrize('shape', [(64, 65), (70, 90)])
+def test_large_maps_gather_offset_by_offset_as_training_gathers_them_all(shape):
+    """Past GATHER_BY_OFFSET_CELLS inference gathers offset by offset: the same Z1, attention."""
+    from spatial_grounding_ros.models.trnet import GATHER_BY_OFFSET_CELLS
+
+    assert shape[0] * shape[1] > GATHER_BY_OFFSET_CELLS
+    vocab, grids, tokens = inputs(shape, 12, seed=14)
+    model = random_model('t-rnet-attn', len(vocab), seed=15, axial=True, far=True)
+    code = model.text_code(tokens)
+    with torch.inference_mode():
+        values, aux = model.ground(grids, code, return_aux=True)
+    trained, trained_aux = model.ground(grids, code, return_aux=True)  # gradients on
+    assert torch.equal(aux['relation_map'], trained_aux['relation_map'].detach())
+    assert torch.equal(aux['attention'], trained_aux['attention'].detach())
+    torch.testing.assert_close(values, trained.detach(), **TOLERANCE)

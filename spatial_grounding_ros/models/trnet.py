@@ -27,6 +27,10 @@ from .head import build_head, outputs
 from .protocol import Capabilities, EntityRows, RelationCode
 from .relation import cell_pairs, kind_table, pair_relations
 
+# a map of more cells than this is grounded (without gradients) one neighbour offset at a time:
+# on small maps one gather of all offsets costs fewer calls
+GATHER_BY_OFFSET_CELLS = 64 * 64
+
 
 class TRNet(EntityRows, nn.Module):
     """
@@ -215,9 +219,10 @@ class TRNet(EntityRows, nn.Module):
         first = centre.view(b, h, w) * (n_kinds + 1)
         pairs = [first + neighbour for neighbour in shifted(around, radius)]
         table = relations.flatten(1).expand(b, -1)  # a pair's row * P + its offset
-        if torch.is_grad_enabled():
+        if torch.is_grad_enabled() or h * w <= GATHER_BY_OFFSET_CELLS:
             # one gather of all offsets and amax, whose gradient splits among equal maxima
-            index = (torch.stack(pairs, -1) * p + torch.arange(p, device=grids.device)).view(b, -1)
+            pairs = [torch.stack(pairs, -1)]  # (B, H, W, P)
+            index = (pairs[0] * p + torch.arange(p, device=grids.device)).view(b, -1)
             z1 = table.gather(1, index).view(b, h * w, p).amax(-1).view(b, h, w)
         else:  # offset by offset: the same maxima without (B, N, P) indices, 4x faster at 512^2
             z1 = None
@@ -230,11 +235,18 @@ class TRNet(EntityRows, nn.Module):
         word_attention = None
         if return_aux and code.attention is not None:
             # the mean over the map's pairs: each kind pair's attention times its pair count
-            maps = torch.arange(b, device=grids.device)[:, None, None] * n_rows
-            counts = sum(
-                torch.bincount((pair + maps).flatten(), minlength=b * n_rows) for pair in pairs
-            ).to(relations.dtype)
+            counts = pair_counts(pairs, n_rows).to(relations.dtype)
             word_attention = (counts.view(b, 1, n_rows) @ code.attention.expand(b, -1, -1))[
                 :, 0
             ] / (p * h * w)
         return outputs(values, z1, word_attention, return_aux)
+
+
+def pair_counts(pairs: list[torch.Tensor], n_rows: int) -> torch.Tensor:
+    """Return how often each map holds each table row (B * n_rows,), from its pairs' rows."""
+    b = len(pairs[0])
+    counts = 0
+    for pair in pairs:  # (B, H, W) per offset, or (B, H, W, P) all at once
+        maps = torch.arange(b, device=pair.device).view(b, *[1] * (pair.dim() - 1)) * n_rows
+        counts = counts + torch.bincount((pair + maps).flatten(), minlength=b * n_rows)
+    return counts
