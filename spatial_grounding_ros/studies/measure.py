@@ -118,6 +118,8 @@ def machine() -> dict:
         'usable_cores': len(os.sched_getaffinity(0)),
         'torch_threads': torch.get_num_threads(),
         'torch': torch.__version__,
+        # the kernels torch picked (AVX2, AVX512): float sums, and so trained weights, differ
+        'cpu_capability': torch.backends.cpu.get_cpu_capability(),
         'python': platform.python_version(),
         'platform': platform.platform(),
         'load_average_at_start': list(os.getloadavg()),

@@ -96,6 +96,8 @@ def value_map_row(task: str, model_name: str, path: Path, summary: dict, test) -
         'checkpoint': path.name,
         'commit': code_version(),
         'command': 'spatial-grounding reproduce --tasks {} --models {}'.format(task, model_name),
+        # the kernels torch picked: the same code trains other weights on AVX2 than on AVX512
+        'cpu_capability': torch.backends.cpu.get_cpu_capability(),
     }
     g1 = torch.from_numpy(test.grids[:1])
     tokens = torch.from_numpy(loaded.vocab.encode_batch(test.instructions[:512]))
