@@ -31,8 +31,8 @@ def judged(values: np.ndarray, temperature: float):
     top = np.argpartition(-p, k - 1)[:k]
     others = [i for i in top[np.argsort(-p[top], kind='stable')] if i != best][:ALTERNATIVES]
 
-    def cell(i):
-        return tuple(int(x) for x in np.unravel_index(i, values.shape))
+    def cell(i):  # a flat index's (row, col): divmod, unravel_index's cost is per call
+        return divmod(int(i), values.shape[1])
 
     return cell(best), float(p[best]), [(cell(i), float(p[i])) for i in others]
 

@@ -53,13 +53,11 @@ def _groups(mask: np.ndarray):
     map's objects cost numpy's pace, not one Python step per cell.
     """
     cells = np.argwhere(mask)
-    if len(cells) < 2:
+    if len(cells) < 2 or not touching(mask):
         return cells, None
     index = np.full(mask.shape, -1, dtype=np.int64)
     index[cells[:, 0], cells[:, 1]] = np.arange(len(cells))
     a, b = _touching_pairs(index)
-    if not len(a):
-        return cells, None
     root = np.arange(len(cells))
     while True:
         ra, rb = root[a], root[b]
@@ -73,6 +71,15 @@ def _groups(mask: np.ndarray):
             if np.array_equal(hop, root):
                 break
             root = hop
+
+
+def touching(mask: np.ndarray) -> bool:
+    """Say whether any two cells of a mask are 8-neighbours (a cheap test before joining)."""
+    h, w = mask.shape
+    return any(
+        (mask[0:h - dr, max(0, -dc):w - max(0, dc)] & mask[dr:h, max(0, dc):w - max(0, -dc)]).any()
+        for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1))
+    )
 
 
 def _touching_pairs(index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

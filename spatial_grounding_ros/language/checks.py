@@ -284,10 +284,10 @@ def ambiguity(
         # compared as the grounder compares them: each landmark at its anchor (footprints.py)
         axis, sign = EXTREME_SIDES[before[0]]
         side = named_sides(words, mentions, offsets).get(m.kind, (0, 0))
-        landmarks = (
-            footprints(grid, m.kind) if drawn_over_cells else np.argwhere(grid == m.kind)[:, None]
-        )
-        keys = [sign * anchor(cells, side)[axis] for cells in landmarks]
+        if drawn_over_cells:
+            keys = [sign * anchor(cells, side)[axis] for cells in footprints(grid, m.kind)]
+        else:  # each cell one landmark, its own anchor
+            keys = (sign * np.argwhere(grid == m.kind)[:, axis]).tolist()
         ties = keys.count(max(keys))
         return (ties, f'tie as {before[0]}') if ties > 1 else None
     return None if set(before) & QUALIFIERS else (count, '')
