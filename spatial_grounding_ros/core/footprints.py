@@ -73,28 +73,33 @@ def _groups(mask: np.ndarray):
             root = hop
 
 
+def neighbours(grid: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """
+    Return views (a, b) of a 2-D array where b holds each a-cell's 8-neighbour, each pair once.
+
+    One view pair per direction: the neighbour to the east, south-west, south and south-east.
+    """
+    h, w = grid.shape
+    out = []
+    for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
+        c0, c1 = max(0, -dc), w - max(0, dc)
+        out.append((grid[0:h - dr, c0:c1], grid[dr:h, c0 + dc:c1 + dc]))
+    return out
+
+
 def touching(mask: np.ndarray) -> bool:
     """Say whether any two cells of a mask are 8-neighbours (a cheap test before joining)."""
-    h, w = mask.shape
-    return any(
-        (mask[0:h - dr, max(0, -dc):w - max(0, dc)] & mask[dr:h, max(0, dc):w - max(0, -dc)]).any()
-        for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1))
-    )
+    return any((a & b).any() for a, b in neighbours(mask))
 
 
 def _touching_pairs(index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the pairs of cells (their indices, -1 none) that are 8-neighbours, each once."""
-    h, w = index.shape
-    a_parts, b_parts = [], []
-    # each pair once: the neighbour to the east, south-west, south and south-east
-    for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
-        c0, c1 = max(0, -dc), w - max(0, dc)
-        a = index[0:h - dr, c0:c1]
-        b = index[dr:h, c0 + dc:c1 + dc]
+    firsts, seconds = [], []
+    for a, b in neighbours(index):
         both = (a >= 0) & (b >= 0)
-        a_parts.append(a[both])
-        b_parts.append(b[both])
-    return np.concatenate(a_parts), np.concatenate(b_parts)
+        firsts.append(a[both])
+        seconds.append(b[both])
+    return np.concatenate(firsts), np.concatenate(seconds)
 
 
 def anchor(cells: np.ndarray, side: tuple[int, int]) -> tuple[int, int]:
