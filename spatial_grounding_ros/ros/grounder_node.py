@@ -20,10 +20,10 @@ value_map_image, relation_map and a diagnostic naming the intent; the node's sta
 keeps running. The service ground_instruction answers one instruction without publishing, or
 refuses it at once as `busy` when max_pending_requests are in flight.
 
-Threads (spin() runs the node in a MultiThreadedExecutor of executor_threads()): the inputs in
-one callback group, topic groundings in another (a guard condition the inputs trigger), service
-requests in a reentrant one and the status and lifecycle in the default one, so a long grounding
-neither stops the status nor the inputs. One grounding runs at a time (the model lock).
+Threads: the inputs, the status and the lifecycle run in the spinning thread (spin()'s
+ServingExecutor); topic groundings on a thread of their own, which the inputs wake; service
+requests on request threads (max_pending_requests + 1), so a long grounding neither stops the
+status nor the inputs. One grounding runs at a time (the model lock).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid, Path
 import numpy as np
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import Image
@@ -70,9 +70,6 @@ from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
 STEADY = ClockType.STEADY_TIME  # instruction_timeout is wall time, also under use_sim_time
-# executor threads beyond those service requests may block: the inputs, topic groundings, the
-# status and lifecycle, and one to refuse a request as busy at once
-SPARE_THREADS = 4
 
 
 class GrounderNode(LifecycleNode):
@@ -95,12 +92,15 @@ class GrounderNode(LifecycleNode):
         self.requests = 0  # ground_instruction requests in flight
         self.grounding = ''  # the instruction a topic grounding works on
         self.hold = InstructionHold()
-        self.input_group = MutuallyExclusiveCallbackGroup()
         self.service_group = ReentrantCallbackGroup()
-        # topic groundings run here, triggered by the inputs, so the inputs are taken meanwhile
-        self.ground_trigger = self.create_guard_condition(
-            self.on_ground_trigger, MutuallyExclusiveCallbackGroup()
+        # topic groundings run on a thread of their own, woken by the inputs, so the inputs
+        # are taken meanwhile and the spinning thread waits while the model works
+        self.ground_wanted = threading.Event()
+        self.closing = False
+        self.grounding_thread = threading.Thread(
+            target=self.topic_groundings, name='topic groundings', daemon=True
         )
+        self.grounding_thread.start()
         self.release_input()
         # diagnostics in every state: they say why an instruction was not grounded; deep
         # enough for a burst's reports
@@ -111,9 +111,13 @@ class GrounderNode(LifecycleNode):
     def param(self, name: str):
         return self.get_parameter(name).value
 
-    def executor_threads(self) -> int:
-        """Threads spin() gives the node: every request in flight may wait for the model."""
-        return self.param('max_pending_requests') + SPARE_THREADS
+    def pooled_groups(self) -> tuple:
+        """Return the callback groups spin() runs on its request threads: the service's."""
+        return (self.service_group,)
+
+    def request_threads(self) -> int:
+        """Every request in flight may wait for the model, and one more is refused at once."""
+        return self.param('max_pending_requests') + 1
 
     def state_label(self) -> str:
         return 'active' if self.active else 'inactive' if self.grounder else 'unconfigured'
@@ -166,7 +170,7 @@ class GrounderNode(LifecycleNode):
         self.value_raw_pub = publisher(Float32MultiArray, topics.VALUE_MAP_RAW, LATCHED)
         self.value_image_pub = publisher(Image, topics.VALUE_MAP_IMAGE, LATCHED)
         self.relation_map_pub = publisher(OccupancyGrid, topics.RELATION_MAP, LATCHED)
-        subscription, group = self.create_subscription, self.input_group
+        subscription = self.create_subscription
         self.topics = [
             self.goal_pub,
             self.path_pub,
@@ -176,13 +180,12 @@ class GrounderNode(LifecycleNode):
             self.relation_map_pub,
             subscription(
                 OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED,
-                callback_group=group,
             ),
             subscription(
-                String, topics.INSTRUCTION, self.on_instruction, BURST, callback_group=group
+                String, topics.INSTRUCTION, self.on_instruction, BURST
             ),
             subscription(
-                PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10, callback_group=group
+                PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10
             ),
             self.create_service(
                 GroundInstruction,
@@ -250,10 +253,13 @@ class GrounderNode(LifecycleNode):
             self.release_input()
 
     def destroy_node(self) -> None:
+        self.closing = True
+        self.ground_wanted.set()
+        self.grounding_thread.join()  # a grounding under way ends first
         self.release()  # as a shutdown transition would: model and topics first
         super().destroy_node()
 
-    # --- topics (the input group: short; groundings run in on_ground_trigger)
+    # --- topics (short: in the spinning thread; groundings run in ground_held)
 
     @guarded('entity_map')
     def on_entity_map(self, msg: OccupancyGrid) -> None:
@@ -287,7 +293,7 @@ class GrounderNode(LifecycleNode):
             self.grid, self.map_msg = grid, msg
             self.report_dropped(self.hold.expire(self.param('instruction_timeout')))
             if self.active and self.hold.on_map(self.param('reground_on_map_change')):
-                self.ground_trigger.trigger()
+                self.ground_wanted.set()
 
     def check_text(self, text: str) -> None:
         """Raise ValueError naming what is wrong with an instruction (or the node's state)."""
@@ -320,7 +326,7 @@ class GrounderNode(LifecycleNode):
             self.cancel_expiry()
             self.report_dropped(self.hold.hold(text))
             if self.grid is not None:
-                self.ground_trigger.trigger()
+                self.ground_wanted.set()
                 return
             timeout = self.param('instruction_timeout')
             if timeout > 0:
@@ -328,7 +334,6 @@ class GrounderNode(LifecycleNode):
                     timeout,
                     self.expire_instruction,
                     clock=Clock(clock_type=STEADY),
-                    callback_group=self.input_group,
                 )
         self.report(
             'instruction',
@@ -393,9 +398,18 @@ class GrounderNode(LifecycleNode):
         header = Header(stamp=stamp, frame_id=frame)
         return Poser(map_msg.info, header, self.param('goal_heading'), self.robot_yaw)
 
+    def topic_groundings(self) -> None:
+        """Run the grounding thread: ground the held instruction each time an input wakes it."""
+        while True:
+            self.ground_wanted.wait()
+            self.ground_wanted.clear()
+            if self.closing:
+                return
+            self.ground_held()
+
     @guarded('grounding')
-    def on_ground_trigger(self) -> None:
-        """Ground the held instruction on the held map, if it still waits (the ground group)."""
+    def ground_held(self) -> None:
+        """Ground the held instruction on the held map, if it still waits (grounding thread)."""
         with self.state_lock:
             text = self.hold.take() if self.active and self.grid is not None else None
             if text is None:
