@@ -163,6 +163,37 @@ def test_nearness_to_a_solid_landmark_is_answered_and_furthest_from_not_read_as_
     assert office.ground(grid, said).reason_code == 'unsupported'
 
 
+@pytest.mark.parametrize(
+    'instruction',
+    [
+        'go away from the fridge',
+        'move away from the couch',
+        'get far away from the fridge',
+        'far from the couch',
+        'stay clear of the fridge',
+        'two cells away from the fridge',
+        'the farthest cell from the fridge',
+        'go to the furthest point from the couch',
+    ],
+)
+def test_away_from_a_landmark_sends_no_goal_to_it(instruction):
+    """Words that say where not to be, or a distance with no side, name no cell: declined."""
+    table, grid = office_map()
+    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    assert g.goal is None and g.reason_code in ('unsupported', 'ambiguous'), (g.reason, g.goal)
+
+
+def test_a_kind_picked_farthest_away_from_a_landmark_is_still_answered():
+    table, grid = office_map()
+    office = Grounder.from_checkpoint(entities=OFFICE)
+    chairs = np.argwhere(grid == table.index('chair'))
+    far = chairs[((chairs - (7, 8)) ** 2).sum(1).argmax()]
+    g = office.ground(grid, 'go to the chair farthest away from the fridge')
+    assert g.reason is None and beside(g, tuple(far))
+    # a side and a count away from a landmark is a place
+    assert office.ground(grid, 'one cell left away from the fridge').goal == (7, 7)
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

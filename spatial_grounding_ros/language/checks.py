@@ -31,6 +31,8 @@ grounder's to judge, after it has grounded.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .lexicon import (
@@ -96,6 +98,13 @@ UNLEARNED = (
     'furthest from', 'farthest from', 'furthest away from', 'farthest away from',
     'same row as', 'same column as',
 )  # fmt: skip
+# words that say where not to be, or a distance with no side ("go away from the fridge", "two
+# cells away from it"): with no direction word, no cell to go to (the network would read them
+# as closest to the landmark); with one ("one cell left, away from the fridge"), a place
+AWAY = ('away from', 'far from', 'clear of')
+# the farthest of cells, not of a kind ("the farthest cell from the lamp"): never learned, and
+# the network reads it as the closest
+FARTHEST_CELL = re.compile(r' (?:farthest|furthest) (?:\w+ ){1,2}from ')
 # words before an extreme that say it is one of several that pick the landmark together
 # ("the left topmost horse", "topmost and eastmost rock", "the higher of westernmost houses",
 # "the two topmost trees")

@@ -38,9 +38,11 @@ import functools
 
 from .checks import (
     ARTICLES,
+    AWAY,
     BEFORE_A_NAME,
     CLAUSES,
     DIRECTIONS,
+    FARTHEST_CELL,
     MAP_WORDS,
     NUMBERS,
     PHRASE_ENDS,
@@ -439,6 +441,12 @@ class Reader:
         unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
         if mentions and unlearned:
             return f'unsupported: "{unlearned}" is no relation the model learned'
+        farthest = None if place is not None else FARTHEST_CELL.search(text)
+        if mentions and farthest:
+            return f'unsupported: "{farthest.group(0).strip()}" is no relation the model learned'
+        away = next((w for w in AWAY if f' {w} ' in text), None)
+        if mentions and away and place is None and not set(words) & set(DIRECTIONS):
+            return f'unsupported: "{away}" says where not to be, not which cell to go to'
         first = mentions[0].start if mentions else len(words)
         for i, w in unknown:
             nxt = words[i + 1] if i + 1 < len(words) else None
