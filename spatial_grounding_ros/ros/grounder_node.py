@@ -58,6 +58,7 @@ from .node_support import (
     report,
     SEE_OVERRIDES,
     spin,
+    Worker,
 )
 from .package_files import find_config
 from .qos import BURST, LATCHED
@@ -95,12 +96,7 @@ class GrounderNode(LifecycleNode):
         self.service_group = ReentrantCallbackGroup()
         # topic groundings run on a thread of their own, woken by the inputs, so the inputs
         # are taken meanwhile and the spinning thread waits while the model works
-        self.ground_wanted = threading.Event()
-        self.closing = False
-        self.grounding_thread = threading.Thread(
-            target=self.topic_groundings, name='topic groundings', daemon=True
-        )
-        self.grounding_thread.start()
+        self.topic_grounding = Worker(self.ground_held, 'topic groundings')
         self.release_input()
         # diagnostics in every state: they say why an instruction was not grounded; deep
         # enough for a burst's reports
@@ -253,9 +249,7 @@ class GrounderNode(LifecycleNode):
             self.release_input()
 
     def destroy_node(self) -> None:
-        self.closing = True
-        self.ground_wanted.set()
-        self.grounding_thread.join()  # a grounding under way ends first
+        self.topic_grounding.stop()  # a grounding under way ends first
         self.release()  # as a shutdown transition would: model and topics first
         super().destroy_node()
 
@@ -293,7 +287,7 @@ class GrounderNode(LifecycleNode):
             self.grid, self.map_msg = grid, msg
             self.report_dropped(self.hold.expire(self.param('instruction_timeout')))
             if self.active and self.hold.on_map(self.param('reground_on_map_change')):
-                self.ground_wanted.set()
+                self.topic_grounding.wake()
 
     def check_text(self, text: str) -> None:
         """Raise ValueError naming what is wrong with an instruction (or the node's state)."""
@@ -326,7 +320,7 @@ class GrounderNode(LifecycleNode):
             self.cancel_expiry()
             self.report_dropped(self.hold.hold(text))
             if self.grid is not None:
-                self.ground_wanted.set()
+                self.topic_grounding.wake()
                 return
             timeout = self.param('instruction_timeout')
             if timeout > 0:
@@ -397,15 +391,6 @@ class GrounderNode(LifecycleNode):
         frame = map_msg.header.frame_id or self.param('default_frame_id')
         header = Header(stamp=stamp, frame_id=frame)
         return Poser(map_msg.info, header, self.param('goal_heading'), self.robot_yaw)
-
-    def topic_groundings(self) -> None:
-        """Run the grounding thread: ground the held instruction each time an input wakes it."""
-        while True:
-            self.ground_wanted.wait()
-            self.ground_wanted.clear()
-            if self.closing:
-                return
-            self.ground_held()
 
     @guarded('grounding')
     def ground_held(self) -> None:

@@ -384,6 +384,32 @@ def spin(make_node: Callable[..., Node], name: str, args: list[str] | None = Non
     os._exit(code)
 
 
+class Worker:
+    """A thread that runs `work` each time it is woken; a wake while it works runs it again."""
+
+    def __init__(self, work: Callable[[], None], name: str):
+        self.work, self.wanted, self.closing = work, threading.Event(), False
+        self.thread = threading.Thread(target=self.run, name=name, daemon=True)
+        self.thread.start()
+
+    def wake(self) -> None:
+        self.wanted.set()
+
+    def stop(self) -> None:
+        """End the thread once the work under way has ended."""
+        self.closing = True
+        self.wanted.set()
+        self.thread.join()
+
+    def run(self) -> None:
+        while True:
+            self.wanted.wait()
+            self.wanted.clear()
+            if self.closing:
+                return
+            self.work()
+
+
 class ServingExecutor(SingleThreadedExecutor):
     """
     Run callbacks in the spinning thread, those of `pooled` callback groups on a thread pool.
