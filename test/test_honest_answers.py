@@ -194,6 +194,25 @@ def test_a_kind_picked_farthest_away_from_a_landmark_is_still_answered():
     assert office.ground(grid, 'one cell left away from the fridge').goal == (7, 7)
 
 
+@pytest.mark.parametrize(
+    'instruction',
+    ['go north', 'head east', 'go west please', 'go north-west', 'go 3 cells north',
+     'move 2 cells to the left', 'go to the south', 'north'],
+)
+def test_a_direction_alone_is_a_motion_not_a_place(instruction):
+    """With no landmark, a direction is a move from where the robot is: no cell of the map."""
+    table, grid = office_map()
+    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    assert (g.goal, g.intent, g.reason_code) == (None, 'unsupported', 'unsupported'), g.reason
+
+
+def test_a_corner_is_a_place_without_a_landmark():
+    table, grid = office_map()
+    office = Grounder.from_checkpoint(entities=OFFICE)
+    assert office.ground(grid, 'go to the bottom right corner').goal == (9, 9)
+    assert office.ground(grid, 'go to the top left corner').goal == (1, 0)
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

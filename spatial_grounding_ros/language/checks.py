@@ -42,6 +42,8 @@ from .lexicon import (
     Mention,
     RELATION_WORDS,
 )
+from .places import FAR_WORDS
+from .vocabulary import GO_VERBS
 from ..core.entities import EntityTable
 from ..core.footprints import anchor, footprints, side_of
 
@@ -222,6 +224,60 @@ def off_map(grid: np.ndarray, offsets: list[tuple[Mention, tuple]]) -> bool:
         if not inside.any():
             return True
     return False
+
+
+# the words of a move besides its directions and count ("go 3 cells north", "head east")
+MOVE_WORDS = GO_VERBS | ARTICLES | frozenset('to towards toward and'.split())
+COUNTED_UNITS = frozenset('cell cells square squares step steps space spaces tile tiles'.split())
+
+
+def moves(content: list[str]) -> bool:
+    """
+    Say whether words that name no landmark ask for a move: directions, a count, a verb.
+
+    "go north", "move 2 cells to the left": a move from where the robot is, which the map
+    alone does not place (the network would pick a cell by the words). A cell or a corner
+    ("the top left corner", "the top left cell") is a place of the map, and a number that no
+    unit or direction follows is a name ("move the 10 above the 11": ISI's numbered blocks).
+    """
+    if not set(content) & set(DIRECTIONS):
+        return False
+    for i, w in enumerate(content):
+        before, after = content[i - 1] if i else None, content[i + 1:i + 2]
+        counted = bool(after) and (after[0] in COUNTED_UNITS or after[0] in DIRECTIONS)
+        if w in DIRECTIONS or w in MOVE_WORDS or (is_number(w) and counted):
+            continue
+        if w in COUNTED_UNITS and before is not None and is_number(before):
+            continue
+        return False
+    return True
+
+
+def is_number(word: str) -> bool:
+    return word in NUMBERS or word.isdigit()
+
+
+def relation_reason(words: list[str], place_read: bool) -> str | None:
+    """
+    Return why the relation the words say leaves no cell to go to, or None.
+
+    `place_read`: whether a place's grammar read every word (a side, a kind picked farthest:
+    farthest is then composed, not the network's).
+    """
+    text = f' {" ".join(w for w in words if not (place_read and w in FAR_WORDS))} '
+    sideless = next((w for w in SIDELESS if f' {w} ' in text), None)
+    if sideless:
+        return f'ambiguous: "{sideless}" names no side on a map'
+    unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
+    if unlearned:
+        return f'unsupported: "{unlearned}" is no relation the model learned'
+    farthest = None if place_read else FARTHEST_CELL.search(text)
+    if farthest:
+        return f'unsupported: "{farthest.group(0).strip()}" is no relation the model learned'
+    away = next((w for w in AWAY if f' {w} ' in text), None)
+    if away and not place_read and not set(words) & set(DIRECTIONS):
+        return f'unsupported: "{away}" says where not to be, not which cell to go to'
+    return None
 
 
 def on_obstacle(

@@ -38,22 +38,20 @@ import functools
 
 from .checks import (
     ARTICLES,
-    AWAY,
     BEFORE_A_NAME,
     CLAUSES,
     DIRECTIONS,
-    FARTHEST_CELL,
     MAP_WORDS,
+    moves,
     NUMBERS,
     PHRASE_ENDS,
     QUALIFIERS,
-    SIDELESS,
-    UNLEARNED,
+    relation_reason,
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
-from .places import FAR_WORDS, Place, PLACE_WORDS
+from .places import Place, PLACE_WORDS
 from .units import digits, in_cells, LEARNED_COUNT, offsets
 from .vocabulary import (
     CORRECTIONS,
@@ -322,6 +320,10 @@ class Reader:
                 words_said = ', '.join(f'"{w}"' for w in unknown.unknown_words)
                 return Command(text, 'go', (replace(unknown, reason=f'unreadable: {words_said}'),),
                                None, notes)
+            if moves(content):
+                what = ' '.join(content[:5])
+                return Command(text, 'unsupported', (), f'unsupported: "{what}" is a move from '
+                               'where the robot is, not a place on the map', notes)
             if found or deictic or not set(content) & (set(DIRECTIONS) | QUALIFIERS):
                 what = found[0][1] if found else ' '.join(content[:4])
                 return Command(
@@ -432,21 +434,9 @@ class Reader:
 
     def reason_of(self, words, mentions, unknown, place=None) -> str | None:
         """Return why the words alone leave no cell to go to, or None."""
-        text = f' {" ".join(words)} '
-        if place is not None:  # the place's grammar read every word: farthest is composed
-            text = f' {" ".join(w for w in text.split() if w not in FAR_WORDS)} '
-        sideless = next((w for w in SIDELESS if f' {w} ' in text), None)
-        if mentions and sideless:
-            return f'ambiguous: "{sideless}" names no side on a map'
-        unlearned = next((w for w in UNLEARNED if f' {w} ' in text), None)
-        if mentions and unlearned:
-            return f'unsupported: "{unlearned}" is no relation the model learned'
-        farthest = None if place is not None else FARTHEST_CELL.search(text)
-        if mentions and farthest:
-            return f'unsupported: "{farthest.group(0).strip()}" is no relation the model learned'
-        away = next((w for w in AWAY if f' {w} ' in text), None)
-        if mentions and away and place is None and not set(words) & set(DIRECTIONS):
-            return f'unsupported: "{away}" says where not to be, not which cell to go to'
+        why = relation_reason(words, place is not None)
+        if mentions and why:
+            return why
         first = mentions[0].start if mentions else len(words)
         for i, w in unknown:
             nxt = words[i + 1] if i + 1 < len(words) else None
