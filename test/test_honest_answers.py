@@ -213,6 +213,25 @@ def test_a_corner_is_a_place_without_a_landmark():
     assert office.ground(grid, 'go to the top left corner').goal == (1, 0)
 
 
+@pytest.mark.parametrize(
+    'instruction',
+    [
+        'go to the fridge, then the couch',
+        'go to the couch after the fridge',
+        'go to the couch after visiting the fridge',
+        'go to the couch, but first the fridge',
+        'after the fridge, go to the couch',
+        'before the couch, go to the fridge',
+    ],
+)
+def test_two_steps_go_in_the_order_meant(instruction):
+    """Said in either order, the robot goes to the fridge first, then the couch."""
+    table, grid = office_map()
+    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    assert g.intent == 'sequence' and g.reason is None, (g.intent, g.reason)
+    assert [s.referent for s in g.steps] == [(7, 8), (4, 3)]
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

@@ -52,6 +52,7 @@ from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
 from .places import Place, PLACE_WORDS
+from .steps import steps as split_steps
 from .units import digits, in_cells, LEARNED_COUNT, offsets
 from .vocabulary import (
     CORRECTIONS,
@@ -330,7 +331,7 @@ class Reader:
                     text, 'unsupported', (),
                     f'unsupported: "{what}" names no landmark or cell on the map', notes,
                 )  # fmt: skip
-        steps = self.steps(words)
+        steps = split_steps(words, self.lexicon.mentions)
         if len(steps) > 1:
             return Command(
                 text, 'sequence', tuple(self.reference(s, cell_size) for s in steps), None, notes
@@ -347,26 +348,6 @@ class Reader:
                 return [w for w in rest if w != 'but']
         return words
 
-    def steps(self, words: list[str]) -> list[list[str]]:
-        """Return the steps of a several-step request, or the words as one step."""
-        marks = find_phrase(words, SEQUENCE_MARKS)
-        if not marks:
-            return [words]
-        cuts, start = [], 0
-        for i, p in marks:
-            cuts.append(words[start:i])
-            start = i + len(p.split())
-        cuts.append(words[start:])
-        cuts = [c[1:] if c[:1] == ['first'] else c for c in cuts]
-        cuts = [[w for w in c if w != 'and'] if c[-1:] == ['and'] else c for c in cuts if c]
-        if len(cuts) < 2 or not all(self.lexicon.mentions(c) for c in cuts):
-            return [words]
-        # "then to the horse on the left in that row": a step said of the one before
-        if any(set(c) & {'that', 'there', 'it', 'its', 'those'} for c in cuts[1:]):
-            return [words]
-        return cuts
-
-    # -- stages 4 and 5: one place, in the model's words ---------------------------------
     def reference(self, words: list[str], cell_size: float | None) -> Reference:
         """Return one step's Reference: its spelling read, its slots, its reading's reason."""
         said = ' '.join(words)

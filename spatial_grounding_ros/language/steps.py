@@ -1,0 +1,73 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The steps of a several-step request, in the order they are meant (reading.py's intent).
+
+"the fridge, then the sofa" is two steps in the order said; "the sofa after the fridge",
+"the sofa, but first the fridge" and "before the sofa, the fridge" are the same two in the
+other order. Each step must name a landmark, and a later step said of the one before ("then
+to the horse on the left in that row") leaves the words one step: the network reads them.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from .phrases import find_phrase
+from .vocabulary import GO_VERBS, SEQUENCE_MARKS
+
+# marks before the step to take first: "the sofa after the fridge"
+EARLIER_MARKS = (
+    'but first', 'but before that', 'before that', 'after visiting', 'after going to',
+    'after you go to', 'after you have been to', 'after',
+)
+# a step said of the one before
+BACK_REFERENCES = frozenset('that there it its those'.split())
+
+
+def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[str]]:
+    """Return the steps of the words in the order meant, or the words as one step."""
+    marks = find_phrase(words, SEQUENCE_MARKS)
+    if marks:
+        cuts, start = [], 0
+        for i, p in marks:
+            cuts.append(words[start:i])
+            start = i + len(p.split())
+        cuts = [c[1:] if c[:1] == ['first'] else c for c in [*cuts, words[start:]]]
+        cuts = [[w for w in c if w != 'and'] if c[-1:] == ['and'] else c for c in cuts if c]
+        return checked(cuts, words, mentions)
+    for i, p in find_phrase(words, EARLIER_MARKS):
+        if i > 0:  # "go to the sofa after the fridge": the fridge first
+            return checked([trimmed(words[i + len(p.split()):]), trimmed(words[:i])], words,
+                           mentions)
+    opener = words[0] if words else None
+    if opener in ('after', 'before'):  # "after the fridge, go to the sofa"
+        rest = words[1:]
+        cut = next((j for j, w in enumerate(rest) if j and (w == ',' or w in GO_VERBS)), None)
+        if cut is not None:
+            first, then = rest[:cut], rest[cut + (rest[cut] == ','):]
+            said = [first, then] if opener == 'after' else [then, first]
+            return checked([trimmed(c) for c in said], words, mentions)
+    return [words]
+
+
+def checked(cuts: list[list[str]], words: list[str], mentions) -> list[list[str]]:
+    """Return the cuts as steps if each names a landmark and none is said of another."""
+    if len(cuts) < 2 or not all(cuts) or not all(mentions(c) for c in cuts):
+        return [words]
+    if any(set(c) & BACK_REFERENCES for c in cuts[1:]):
+        return [words]
+    return cuts
+
+
+def trimmed(cut: list[str]) -> list[str]:
+    """Return a step's words without the commas, 'and' and 'first' at its ends."""
+    while cut and cut[0] in (',', 'first'):
+        cut = cut[1:]
+    while cut and cut[-1] in (',', 'and'):
+        cut = cut[:-1]
+    return cut
