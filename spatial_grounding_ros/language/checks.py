@@ -355,6 +355,8 @@ def ambiguity(
             keys = (sign * np.argwhere(grid == m.kind)[:, axis]).tolist()
         ties = keys.count(max(keys))
         return (ties, f'tie as {before[0]}') if ties > 1 else None
+    if before and before[0] in ('nearest', 'closest'):  # "the nearest chair": near to what?
+        return count, 'and no landmark named to be nearest to'
     return None if set(before) & QUALIFIERS else (count, '')
 
 
