@@ -37,7 +37,7 @@ from .language.approach import approach_for
 from .language.checks import map_reason, named_sides, place_offsets, said
 from .language.compose import renamed, shifted
 from .language.lexicon import Lexicon, Mention, Translation
-from .language.places import composed, learned_part, Place, surface
+from .language.places import composed, learned, Place, surface
 from .language.reading import Command, Reader, Reference
 from .models.checkpoints import load_checkpoint, Loaded
 from .models.protocol import TextCode
@@ -322,7 +322,7 @@ class Grounder:
 
         A place the grammar read is said to the network in the words it learned it from
         (places.surface, style 0, the landmarks in its own names); the part of an offset past
-        what it learned shifts its value map (places.learned_part). Words the grammar does not
+        what it learned shifts its value map (places.learned). Words the grammar does not
         read go to the network as read (Reference.model_words).
         """
         table_names = {self.entities.names[k]: v for k, v in names.items()}
@@ -330,11 +330,7 @@ class Grounder:
             return ref.model_words(names)
         # an object named on the goal cell ("reach rock between ...") says no more than "cell"
         # of a place its relation fixes (wording.cell_for_fixed_target)
-        rest, place = (0, 0), replace(place, on=None)
-        if place.relation == 'landmark':
-            part = learned_part(place.offset, place.landmark)
-            rest = (place.offset[0] - part[0], place.offset[1] - part[1])
-            place = replace(place, offset=part)
+        place, rest = learned(replace(place, on=None))
         return surface(renamed(place, table_names)).split(), rest
 
     def network(self, model_grid: np.ndarray, words: list[str]):

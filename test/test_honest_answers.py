@@ -232,6 +232,29 @@ def test_two_steps_go_in_the_order_meant(instruction):
     assert [s.referent for s in g.steps] == [(7, 8), (4, 3)]
 
 
+def test_the_nearest_of_several_with_nothing_to_be_near_is_declined():
+    """Decline "the nearest chair" of two: no landmark is named to be near, so none is guessed."""
+    table, grid = office_map()
+    office = Grounder.from_checkpoint(entities=OFFICE)
+    for said in ('go to the nearest chair', 'the closest chair please'):
+        g = office.ground(grid, said)
+        assert g.goal is None and g.reason_code == 'ambiguous', (said, g.reason)
+    assert beside(office.ground(grid, 'go to the chair nearest the fridge'), (8, 1))
+    grid[2, 2] = 0  # one chair left: the nearest is that one
+    assert beside(office.ground(grid, 'go to the nearest chair'), (8, 1))
+
+
+def test_a_row_and_a_column_past_the_learned_counts_are_composed(grounder):
+    """One landmark's row and another's column, counts past 4: geometry, not the network."""
+    grid = pw_map()  # rock (3, 4), tree (5, 5), house (10, 2), star (7, 7)
+    g = grounder.ground(grid, 'reach cell 5 below rock and 6 to right of house')
+    assert (g.goal, g.reason) == ((8, 8), None)
+    g = grounder.ground(grid, 'reach cell one above rock and five to the right of house')
+    assert (g.goal, g.reason) == ((2, 7), None)
+    g = grounder.ground(grid, 'reach cell 9 below rock and 5 to right of house')
+    assert (g.goal, g.reason) == (None, 'off-map')
+
+
 def test_a_footprint_tie_is_judged_at_the_anchors_the_grounder_uses():
     table, grid = office_map()
     grid[8, 1] = grid[2, 2] = 0

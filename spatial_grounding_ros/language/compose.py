@@ -81,6 +81,16 @@ def compose(
         if reason is None:
             cell, reason = midpoint(a, b, (place.landmark.name, place.other.name))
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
+    if place.relation == 'row-col':  # past the learned counts: one's row, the other's column
+        (a, pa, wa, ra), (b, pb, wb, rb) = locate(place.landmark), locate(place.other)
+        if ra or rb:
+            return Composed([], pa * pb, ra or rb, wa + wb)
+        o, p = place.offset, place.other_offset
+        row = (a if o[0] else b)[:, 0].min() if o[0] + p[0] < 0 else (a if o[0] else b)[:, 0].max()
+        col = (a if o[1] else b)[:, 1].min() if o[1] + p[1] < 0 else (a if o[1] else b)[:, 1].max()
+        goal = (int(row) + o[0] + p[0], int(col) + o[1] + p[1])
+        reason = None if inside(grid, goal) else 'off-map'
+        return Composed([] if reason else [(goal, 1.0)], pa * pb, reason, wa + wb)
     landmark, offset = place.landmark, place.offset
     if landmark.pick not in PICKED:  # the network's landmark, shifted
         found = instances(grid, kinds[landmark.name], table.has_footprints)

@@ -22,7 +22,7 @@ the kind, a corner or an edge from the map alone.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 
 # the four sides, as (row, col) steps; row 0 is north
@@ -144,12 +144,25 @@ def learned_part(offset: tuple[int, int], landmark: Landmark | None = None) -> t
     return offset if learned_offset(offset, landmark) else (0, 0)
 
 
+def learned(place: Place) -> tuple[Place, tuple[int, int]]:
+    """Return a place as the network learned it, and the rest of its offset to shift its map by."""
+    if place.relation != 'landmark':
+        return place, (0, 0)
+    part = learned_part(place.offset, place.landmark)
+    return replace(place, offset=part), (place.offset[0] - part[0], place.offset[1] - part[1])
+
+
+def learned_counts(place: Place) -> bool:
+    """Say whether a row-col place's counts are ones the network learned (Janner's, to 4)."""
+    return max(map(abs, (*place.offset, *place.other_offset))) <= max(_NUMBER)
+
+
 def composed(place: Place) -> bool:
     """Say whether a place is grounded by composing the network's groundings (not read whole)."""
     if place.relation in ('between', 'corner', 'edge'):
         return True
     if place.relation == 'row-col':
-        return False
+        return not learned_counts(place)
     return not learned_offset(place.offset, place.landmark) or composed_landmark(place.landmark)
 
 
