@@ -365,7 +365,9 @@ class Grounder:
             return (*self.network(model_grid, words), words, rest)
 
         kinds = {self.entities.names[m.kind]: m.kind for m in ref.mentions}
-        c = compose.compose(ref.place, self.entities, grid, kinds, ref.reason, network, self.judge)
+        c = compose.compose(
+            ref.place, self.entities, grid, kinds, ref.reason, network, self.judge, robot_cell
+        )
         if c.values is not None:  # a shift of the network's value map
             best, confidence, alternatives = self.judge(c.values)
             referent = nearest_cell(grid, [m.kind for m in ref.mentions], best)

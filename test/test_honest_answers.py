@@ -232,15 +232,17 @@ def test_two_steps_go_in_the_order_meant(instruction):
     assert [s.referent for s in g.steps] == [(7, 8), (4, 3)]
 
 
-def test_the_nearest_of_several_with_nothing_to_be_near_is_declined():
-    """Decline "the nearest chair" of two: no landmark is named to be near, so none is guessed."""
-    table, grid = office_map()
+def test_the_nearest_of_several_is_the_one_nearest_the_robot():
+    """Ground "the nearest chair" as the one nearest the robot; with no robot pose, decline."""
+    table, grid = office_map()  # chairs at (8, 1) and (2, 2)
     office = Grounder.from_checkpoint(entities=OFFICE)
     for said in ('go to the nearest chair', 'the closest chair please'):
         g = office.ground(grid, said)
         assert g.goal is None and g.reason_code == 'ambiguous', (said, g.reason)
+        assert beside(office.ground(grid, said, robot_cell=(7, 3)), (8, 1))
+        assert beside(office.ground(grid, said, robot_cell=(3, 4)), (2, 2))
     assert beside(office.ground(grid, 'go to the chair nearest the fridge'), (8, 1))
-    grid[2, 2] = 0  # one chair left: the nearest is that one
+    grid[2, 2] = 0  # one chair left: the nearest is that one, robot or not
     assert beside(office.ground(grid, 'go to the nearest chair'), (8, 1))
 
 

@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from .places import Landmark, ORDINAL_WORDS, PICKED, Place, SIDES
+from .places import Landmark, ORDINAL_WORDS, PICKED, Place, ROBOT, SIDES
 from ..core.entities import EntityTable
 from ..core.footprints import anchor, footprints, side_of
 
@@ -52,7 +52,7 @@ class Composed:
 
 def compose(
     place: Place, table: EntityTable, grid: np.ndarray, kinds: dict[str, int],
-    reason: str | None, network: Network, judge: Judge,
+    reason: str | None, network: Network, judge: Judge, robot_cell: Cell | None = None,
 ) -> Composed:
     """
     Return a composed place's cells from the network's groundings of its landmarks.
@@ -60,7 +60,8 @@ def compose(
     An offset past the learned ones shifts the network's value map of the learned part
     (places.learned_part); between is the midpoint of its two landmarks; an ordinal or a
     farthest picks among the map's landmarks of the kind; a corner or a side is the map's.
-    `kinds`: each landmark name's kind; `reason`: why the reading already declines, or None.
+    `kinds`: each landmark name's kind; `reason`: why the reading already declines, or None;
+    `robot_cell`: the robot's (row, col), if known (the anchor of "the nearest chair").
     """
     for name, kind in kinds.items():
         if reason is None and kind not in table.obstacles and not (grid == kind).any():
@@ -70,7 +71,7 @@ def compose(
     if place.relation in ('corner', 'edge'):
         cells, reason = map_place(table, grid, place)
         return Composed(cells, 1.0, reason)
-    locate = Locator(table, grid, kinds, network, judge)
+    locate = Locator(table, grid, kinds, network, judge, robot_cell)
     if place.relation == 'between':
         (a, pa, wa, ra), (b, pb, wb, rb) = map(locate.candidates, (place.landmark, place.other))
         reason = ra or rb
@@ -123,9 +124,9 @@ def compose(
 class Locator:
     """Find one landmark of a place: (its cells, confidence, network words, reason)."""
 
-    def __init__(self, table, grid, kinds, network: Network, judge: Judge):
+    def __init__(self, table, grid, kinds, network: Network, judge: Judge, robot_cell=None):
         self.table, self.grid, self.kinds = table, grid, kinds
-        self.network, self.judge = network, judge
+        self.network, self.judge, self.robot_cell = network, judge, robot_cell
 
     def __call__(self, landmark: Landmark):
         """
@@ -140,6 +141,8 @@ class Locator:
         if landmark.pick == 'ordinal':
             i, reason = ordinal(found, landmark, name)
             return (None if i is None else found[i]), 1.0, [], reason
+        if landmark.pick == 'closest' and landmark.anchor.name == ROBOT and len(found) == 1:
+            return found[0], 1.0, [], None  # the only one is the nearest, wherever the robot is
         if landmark.pick == 'closest' or landmark.pick == 'farthest':
             anchors, confidence, words, reason = self.candidates(landmark.anchor)
             if reason is None and len(anchors) > 1 and landmark.pick == 'farthest':
@@ -164,6 +167,10 @@ class Locator:
         A kind said alone ("the rock" of several) may be any of its landmarks; the relation
         then picks.
         """
+        if landmark.name == ROBOT:
+            if self.robot_cell is None:
+                return [], 1.0, [], 'ambiguous: nearest to the robot, whose cell is not known'
+            return [np.array([self.robot_cell])], 1.0, [], None
         found = instances(self.grid, self.kinds[landmark.name], self.table.has_footprints)
         if landmark.pick is None and len(found) > 1:
             return found, 1.0, [], None

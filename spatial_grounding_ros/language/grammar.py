@@ -38,6 +38,7 @@ from .places import (
     NEAR_WORDS,
     ORDINALS,
     Place,
+    ROBOT,
     SIDE_WORDS,
     SUPERLATIVES,
     UNIT_WORDS,
@@ -121,6 +122,8 @@ def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
         return None
     if not before and not after:
         return Landmark(name)
+    if len(before) == 1 and not after and before[0] in NEAR_WORDS:  # "the nearest chair"
+        return Landmark(name, 'closest', anchor=Landmark(ROBOT))
     if len(before) == 1 and not after and before[0] in SUPERLATIVES:
         return Landmark(name, 'extreme', SUPERLATIVES[before[0]])
     if len(before) == 1 and not after and before[0] in ADJECTIVES:  # "the bottom house"

@@ -64,6 +64,8 @@ UNIT_WORDS = frozenset(
 MAP_NOUNS = frozenset('map grid room area world board floor space'.split())
 EDGE_NOUNS = frozenset('wall edge side border'.split())
 NEAR_WORDS = frozenset('closest nearest'.split())
+# the anchor of a nearest said of nothing else ("the nearest chair"): the robot's cell
+ROBOT = 'robot'
 FAR_WORDS = frozenset('farthest furthest'.split())
 MIDDLE_WORDS = frozenset('middle centre center midpoint'.split())
 HALFWAY_WORDS = frozenset('halfway midway midpoint'.split())
