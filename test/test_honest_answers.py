@@ -32,6 +32,11 @@ ROCK, TREE, HOUSE, PUDDLE, STAR = 8, 9, 10, 1, 2
 
 
 @pytest.fixture(scope='module')
+def office() -> Grounder:
+    return Grounder.from_checkpoint(entities=OFFICE)
+
+
+@pytest.fixture(scope='module')
 def grounder() -> Grounder:
     return Grounder.from_checkpoint()
 
@@ -124,6 +129,12 @@ def test_in_front_of_and_behind_name_no_side_on_a_map():
     assert office.ground(grid, 'go one cell below the fridge').reason is None
 
 
+def farthest_chair_from_the_fridge(table: EntityTable, grid: np.ndarray) -> tuple[int, int]:
+    """Return the office map's chair farthest from its fridge at (7, 8), centre to centre."""
+    chairs = np.argwhere(grid == table.index('chair'))
+    return tuple(chairs[((chairs - (7, 8)) ** 2).sum(1).argmax()])
+
+
 def beside(g, landmark: tuple[int, int]) -> bool:
     """Say whether a grounding stops on a cell beside a one-cell landmark, facing it."""
     near = abs(g.goal[0] - landmark[0]) + abs(g.goal[1] - landmark[1]) == 1
@@ -155,10 +166,9 @@ def test_nearness_to_a_solid_landmark_is_answered_and_furthest_from_not_read_as_
     grid[8, 1], grid[8, 2] = table.index('chair'), 0
     # "furthest from" is no closest: the chair farthest from the fridge, a relation composed
     # over the map's chairs (language/compose.py), the robot beside it
-    chairs = np.argwhere(grid == table.index('chair'))
-    far = chairs[((chairs - (7, 8)) ** 2).sum(1).argmax()]
+    far = farthest_chair_from_the_fridge(table, grid)
     g = office.ground(grid, 'go to the chair furthest from the fridge')
-    assert g.reason is None and beside(g, tuple(far))
+    assert g.reason is None and beside(g, far)
     said = 'go to the cell in the same row as the sofa and the same column as the fridge'
     assert office.ground(grid, said).reason_code == 'unsupported'
 
@@ -176,20 +186,18 @@ def test_nearness_to_a_solid_landmark_is_answered_and_furthest_from_not_read_as_
         'go to the furthest point from the couch',
     ],
 )
-def test_away_from_a_landmark_sends_no_goal_to_it(instruction):
+def test_away_from_a_landmark_sends_no_goal_to_it(office, instruction):
     """Words that say where not to be, or a distance with no side, name no cell: declined."""
     table, grid = office_map()
-    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    g = office.ground(grid, instruction)
     assert g.goal is None and g.reason_code in ('unsupported', 'ambiguous'), (g.reason, g.goal)
 
 
-def test_a_kind_picked_farthest_away_from_a_landmark_is_still_answered():
+def test_a_kind_picked_farthest_away_from_a_landmark_is_still_answered(office):
     table, grid = office_map()
-    office = Grounder.from_checkpoint(entities=OFFICE)
-    chairs = np.argwhere(grid == table.index('chair'))
-    far = chairs[((chairs - (7, 8)) ** 2).sum(1).argmax()]
+    far = farthest_chair_from_the_fridge(table, grid)
     g = office.ground(grid, 'go to the chair farthest away from the fridge')
-    assert g.reason is None and beside(g, tuple(far))
+    assert g.reason is None and beside(g, far)
     # a side and a count away from a landmark is a place
     assert office.ground(grid, 'one cell left away from the fridge').goal == (7, 7)
 
@@ -199,16 +207,15 @@ def test_a_kind_picked_farthest_away_from_a_landmark_is_still_answered():
     ['go north', 'head east', 'go west please', 'go north-west', 'go 3 cells north',
      'move 2 cells to the left', 'go to the south', 'north'],
 )
-def test_a_direction_alone_is_a_motion_not_a_place(instruction):
+def test_a_direction_alone_is_a_motion_not_a_place(office, instruction):
     """With no landmark, a direction is a move from where the robot is: no cell of the map."""
     table, grid = office_map()
-    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    g = office.ground(grid, instruction)
     assert (g.goal, g.intent, g.reason_code) == (None, 'unsupported', 'unsupported'), g.reason
 
 
-def test_a_corner_is_a_place_without_a_landmark():
+def test_a_corner_is_a_place_without_a_landmark(office):
     table, grid = office_map()
-    office = Grounder.from_checkpoint(entities=OFFICE)
     assert office.ground(grid, 'go to the bottom right corner').goal == (9, 9)
     assert office.ground(grid, 'go to the top left corner').goal == (1, 0)
 
@@ -224,18 +231,17 @@ def test_a_corner_is_a_place_without_a_landmark():
         'before the couch, go to the fridge',
     ],
 )
-def test_two_steps_go_in_the_order_meant(instruction):
+def test_two_steps_go_in_the_order_meant(office, instruction):
     """Said in either order, the robot goes to the fridge first, then the couch."""
     table, grid = office_map()
-    g = Grounder.from_checkpoint(entities=OFFICE).ground(grid, instruction)
+    g = office.ground(grid, instruction)
     assert g.intent == 'sequence' and g.reason is None, (g.intent, g.reason)
     assert [s.referent for s in g.steps] == [(7, 8), (4, 3)]
 
 
-def test_the_nearest_of_several_is_the_one_nearest_the_robot():
+def test_the_nearest_of_several_is_the_one_nearest_the_robot(office):
     """Ground "the nearest chair" as the one nearest the robot; with no robot pose, decline."""
     table, grid = office_map()  # chairs at (8, 1) and (2, 2)
-    office = Grounder.from_checkpoint(entities=OFFICE)
     for said in ('go to the nearest chair', 'the closest chair please'):
         g = office.ground(grid, said)
         assert g.goal is None and g.reason_code == 'ambiguous', (said, g.reason)

@@ -245,16 +245,12 @@ def moves(content: list[str]) -> bool:
     for i, w in enumerate(content):
         before, after = content[i - 1] if i else None, content[i + 1:i + 2]
         counted = bool(after) and (after[0] in COUNTED_UNITS or after[0] in DIRECTIONS)
-        if w in DIRECTIONS or w in MOVE_WORDS or (is_number(w) and counted):
+        if w in DIRECTIONS or w in MOVE_WORDS or (w in NUMBERS and counted):
             continue
-        if w in COUNTED_UNITS and before is not None and is_number(before):
+        if w in COUNTED_UNITS and before in NUMBERS:
             continue
         return False
     return True
-
-
-def is_number(word: str) -> bool:
-    return word in NUMBERS or word.isdigit()
 
 
 def relation_reason(words: list[str], place_read: bool) -> str | None:

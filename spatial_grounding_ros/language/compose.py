@@ -87,9 +87,10 @@ def compose(
         if ra or rb:
             return Composed([], pa * pb, ra or rb, wa + wb)
         o, p = place.offset, place.other_offset
-        row = (a if o[0] else b)[:, 0].min() if o[0] + p[0] < 0 else (a if o[0] else b)[:, 0].max()
-        col = (a if o[1] else b)[:, 1].min() if o[1] + p[1] < 0 else (a if o[1] else b)[:, 1].max()
-        goal = (int(row) + o[0] + p[0], int(col) + o[1] + p[1])
+        dr, dc = o[0] + p[0], o[1] + p[1]
+        row = anchor(a if o[0] else b, side_of((dr, 0)))[0]  # of the landmark the row is said of
+        col = anchor(a if o[1] else b, side_of((0, dc)))[1]
+        goal = (row + dr, col + dc)
         reason = None if inside(grid, goal) else 'off-map'
         return Composed([] if reason else [(goal, 1.0)], pa * pb, reason, wa + wb)
     landmark, offset = place.landmark, place.offset
