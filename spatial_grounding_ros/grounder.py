@@ -35,7 +35,7 @@ from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .language import compose
 from .language.approach import approach_for
 from .language.checks import map_reason, named_sides, place_offsets, said
-from .language.compose import renamed, shifted
+from .language.compose import plain_row_col, renamed, shifted
 from .language.lexicon import Lexicon, Mention, Translation
 from .language.places import composed, learned, Place, surface
 from .language.reading import Command, Reader, Reference
@@ -269,7 +269,9 @@ class Grounder:
         self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
     ) -> Grounding:
         """Return the grounding of one place: the network's value map, judged and checked."""
-        if ref.place is not None and composed(ref.place):
+        if ref.place is not None and (
+            composed(ref.place) or plain_row_col(ref.place, self.entities, grid, ref.mentions)
+        ):
             return self.ground_composed(grid, instruction, ref, robot_cell)
         model_grid, names, mentions = self.model_view(grid, ref)
         words, extra = self.network_words(ref, names, ref.place)

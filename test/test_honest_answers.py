@@ -383,3 +383,102 @@ def test_the_ground_command_answers_and_draws_a_map_of_ones_own(tmp_path, capsys
     bad.write_text('0 1\n2\n')
     assert cli.main(['ground', '--map', str(bad), '--instruction', 'reach the rock']) == 2
     assert 'rows of equal length' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    'instruction, referents',
+    [
+        ('go to the fridge and the couch', [(7, 8), (4, 3)]),
+        ('visit the coffee machine and the fridge', [(2, 6), (7, 8)]),
+        ('please go to the couch and to the fridge', [(4, 3), (7, 8)]),
+        ('go to the fridge and go to the coffee machine', [(7, 8), (2, 6)]),
+        ('go to the couch, the fridge and the coffee machine', [(4, 3), (7, 8), (2, 6)]),
+        ('go to the fridge, then the couch and the coffee machine', [(7, 8), (4, 3), (2, 6)]),
+    ],
+)
+def test_landmarks_joined_by_and_are_visited_in_turn(office, instruction, referents):
+    """Visit "the fridge and the couch" in the order said: two places, not the first alone."""
+    table, grid = office_map()
+    g = office.ground(grid, instruction)
+    assert g.intent == 'sequence' and g.reason is None, (g.intent, g.reason)
+    assert [s.referent for s in g.steps] == referents
+
+
+@pytest.mark.parametrize(
+    'instruction, goal',
+    [
+        ('go to the cell between the fridge and the couch', None),
+        ('go one above the fridge and one left of the couch', (6, 2)),
+        ('go one cell above the fridge and two cells left of the couch', (6, 1)),
+        ('go to the fridge and then stop two cells left of it', (7, 6)),
+    ],
+)
+def test_and_inside_one_place_stays_one_place(office, instruction, goal):
+    """Keep an "and" that joins the parts of one place ("a row and a column") one place."""
+    table, grid = office_map()
+    g = office.ground(grid, instruction)
+    assert g.intent == 'go', (g.intent, g.reason)
+    if goal is not None:
+        assert g.goal == goal, (g.goal, g.reason)
+
+
+@pytest.mark.parametrize(
+    'instruction', ['go to the fridge or the couch', 'the couch or the coffee machine please']
+)
+def test_either_of_two_places_is_asked_back(office, instruction):
+    """Decline "the fridge or the couch" as ambiguous: the choice is left open, no guess."""
+    table, grid = office_map()
+    g = office.ground(grid, instruction)
+    assert (g.goal, g.reason_code) == (None, 'ambiguous'), g.reason
+
+
+@pytest.mark.parametrize(
+    'instruction',
+    [
+        'if the coffee machine is on, go to the couch',
+        'go to the fridge unless the door is closed',
+        'go to the fridge when the kettle boils',
+        'go to the couch only if nobody is sitting there',
+        'once the meeting ends go to the coffee machine',
+        'go to the fridge as soon as the light turns green',
+        'wait until the meeting ends, then go to the couch',
+        'if you see the coffee machine, go to the fridge',
+    ],
+)
+def test_a_condition_the_robot_cannot_check_is_declined(office, instruction):
+    """The robot cannot tell whether a condition holds, so it must not act as if it did."""
+    table, grid = office_map()
+    g = office.ground(grid, instruction)
+    assert (g.goal, g.intent, g.reason_code) == (None, 'unsupported', 'unsupported'), g.reason
+    assert 'condition' in g.reason
+
+
+@pytest.mark.parametrize(
+    'instruction', ['go to the couch if you can', 'when you are ready, go to the couch',
+                    'go to the couch if possible', 'whenever you get a chance go to the couch']
+)
+def test_a_polite_condition_is_no_condition(office, instruction):
+    """Read "if you can" as a courtesy, not a condition: the couch is the place."""
+    table, grid = office_map()
+    assert beside(office.ground(grid, instruction), (4, 3))
+
+
+@pytest.mark.parametrize(
+    'instruction, landmark',
+    [
+        ('go to the couch and sit down', (4, 3)),
+        ('go to the couch and lie down', (4, 3)),
+        ('go to the fridge and turn left', (7, 8)),
+        ('go to the fridge and slow down', (7, 8)),
+        ('go to the fridge then sit down', (7, 8)),
+        ('go to the couch, sit down', (4, 3)),
+        ('go to the fridge and look around', (7, 8)),
+        ('go to the fridge and wait there for two minutes', (7, 8)),
+        ('go to the coffee machine and wait until i come back', (2, 6)),
+    ],
+)
+def test_what_to_do_there_does_not_move_the_goal(office, instruction, landmark):
+    """Keep the goal of "go to the couch and sit down": "down" is how to sit, not where."""
+    table, grid = office_map()
+    g = office.ground(grid, instruction)
+    assert beside(g, landmark), (instruction, g.goal, g.reason)

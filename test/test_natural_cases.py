@@ -21,15 +21,18 @@ import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 CASES = REPO / 'spatial_grounding_ros' / 'data' / 'natural'
-SETS = {'dev': (240, 12), 'held_out': (160, 8)}  # at least this many cases and maps
-CATEGORIES = {
+# at least this many cases and maps; the requests sets: clauses around the place
+SETS = {'dev': (240, 12), 'held_out': (160, 8), 'requests': (60, 3), 'requests_held_out': (55, 3)}
+WORDING = {
     'offset', 'filler', 'typo', 'unit', 'near', 'extreme', 'nearest', 'negation', 'question',
     'stop', 'sequence', 'correction', 'unsupported', 'unknown', 'missing', 'ambiguous', 'offmap',
     'obstacle', 'costly', 'long', 'noun',
 }
+REQUESTS = {'condition', 'courtesy', 'arrival', 'list', 'either'}
+CATEGORIES = WORDING | REQUESTS
 SIZES = {'office': (10, 32), 'puddleworld': (10, 15)}
 NO_GOAL = {'negation', 'question', 'stop', 'unsupported', 'unknown', 'missing', 'ambiguous',
-           'offmap', 'obstacle'}
+           'offmap', 'obstacle', 'condition', 'either'}
 
 
 def load(name: str) -> dict:
@@ -116,11 +119,14 @@ def test_cases_are_well_formed(name):
 
 def test_every_category_in_both_sets():
     for name in SETS:
-        assert {c['category'] for c in load(name)['cases']} == CATEGORIES, name
+        kinds = REQUESTS if name.startswith('requests') else WORDING
+        assert {c['category'] for c in load(name)['cases']} == kinds, name
 
 
-def test_held_out_shares_no_map_or_wording_with_dev():
-    dev, held = load('dev'), load('held_out')
+@pytest.mark.parametrize('dev_name, held_name', [('dev', 'held_out'),
+                                                 ('requests', 'requests_held_out')])
+def test_held_out_shares_no_map_or_wording_with_dev(dev_name, held_name):
+    dev, held = load(dev_name), load(held_name)
     assert not set(dev['maps']) & set(held['maps'])
     drawn = {m['rows'] for m in dev['maps'].values()}
     assert not drawn & {m['rows'] for m in held['maps'].values()}

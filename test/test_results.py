@@ -149,6 +149,8 @@ def readme_section(heading: str) -> str:
         ('Results: landmark kinds by name or by role', 'kinds_ablation.md'),
         ('Results: natural wording (dev)', 'natural_dev.md'),
         ('Results: natural wording (held out)', 'natural_held_out.md'),
+        ('Results: requests (dev)', 'natural_requests.md'),
+        ('Results: requests (held out)', 'natural_requests_held_out.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):

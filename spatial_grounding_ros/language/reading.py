@@ -48,6 +48,7 @@ from .checks import (
     QUALIFIERS,
     relation_reason,
 )
+from .clauses import choice, condition, without_action, without_courtesies
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
@@ -288,6 +289,7 @@ class Reader:
         return None
 
     def intent(self, text, words, question, cell_size, notes) -> Command:
+        words = without_courtesies(words)  # "if you can": asks nothing (clauses.py)
         mentions = self.lexicon.mentions(words)
         content = [w for w in words if w not in FILLERS]
         if not mentions and content and all(w in STOP_WORDS for w in content) and (
@@ -302,6 +304,13 @@ class Reader:
             return Command(
                 text, 'negation', (), f'negation: "{negation}" says where not to go', notes
             )
+        words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
+        notes += ('action',) if action else ()
+        content = [w for w in words if w not in FILLERS]
+        said_if = condition(content) or condition(self.spelled(content)[0])
+        if said_if is not None:
+            return Command(text, 'unsupported', (), f'unsupported: "{said_if}" is a condition '
+                           'the robot cannot check', notes)
         positive = self.without_negative_clause(words)
         if positive is not words:
             words, mentions = positive, self.lexicon.mentions(positive)
@@ -331,12 +340,16 @@ class Reader:
                     text, 'unsupported', (),
                     f'unsupported: "{what}" names no landmark or cell on the map', notes,
                 )  # fmt: skip
+        if choice(words, self.lexicon.mentions):  # "the fridge or the couch"
+            ref = self.reference(words, cell_size)
+            return Command(text, 'go', (replace(ref, reason='ambiguous: one place or another '
+                                        'is named: say which'),), None, notes)
         steps = split_steps(words, self.lexicon.mentions)
         if len(steps) > 1:
             return Command(
                 text, 'sequence', tuple(self.reference(s, cell_size) for s in steps), None, notes
             )
-        return Command(text, 'go', (self.reference(words, cell_size),), None, notes)
+        return Command(text, 'go', (self.reference(steps[0], cell_size),), None, notes)
 
     def without_negative_clause(self, words: list[str]) -> list[str]:
         """Return the words without a "not the sofa" clause beside a place to go, if any."""

@@ -9,7 +9,8 @@ The steps of a several-step request, in the order they are meant (reading.py's i
 
 "the fridge, then the sofa" is two steps in the order said; "the sofa after the fridge",
 "the sofa, but first the fridge" and "before the sofa, the fridge" are the same two in the
-other order. Each step must name a landmark, and a later step said of the one before ("then
+other order; "the fridge and the sofa" and "go to the fridge and go to the sofa" are two in
+the order said. Each step must name a landmark, and a later step said of the one before ("then
 to the horse on the left in that row") leaves the words one step: the network reads them.
 """
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 from typing import Callable
 
+from .clauses import bare, listed
 from .phrases import find_phrase
 from .vocabulary import GO_VERBS, SEQUENCE_MARKS
 
@@ -39,11 +41,23 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
             start = i + len(p.split())
         cuts = [c[1:] if c[:1] == ['first'] else c for c in [*cuts, words[start:]]]
         cuts = [[w for w in c if w != 'and'] if c[-1:] == ['and'] else c for c in cuts if c]
-        return checked(cuts, words, mentions)
+        # "then the sofa and the lamp": a list of places within a step is that many steps
+        cuts = [place for c in cuts for place in listed(c, mentions) or [c]]
+        return said_of_it(cuts, mentions) or checked(cuts, words, mentions)
     for i, p in find_phrase(words, EARLIER_MARKS):
         if i > 0:  # "go to the sofa after the fridge": the fridge first
             return checked([trimmed(words[i + len(p.split()):]), trimmed(words[:i])], words,
                            mentions)
+    places = listed(words, mentions)  # "the fridge and the couch"
+    if places:
+        return checked(places, words, mentions)
+    # "go to the fridge and go to the couch": each part a place of its own
+    ands = [i for i, w in enumerate(words[:-1]) if w == 'and' and words[i + 1] in GO_VERBS]
+    if ands:
+        bounds = [0, *ands, len(words)]
+        cuts = [trimmed(words[a:b]) for a, b in zip(bounds, bounds[1:])]
+        if said_of_it(cuts, mentions) or checked(cuts, words, mentions) is cuts:
+            return said_of_it(cuts, mentions) or cuts
     opener = words[0] if words else None
     if opener in ('after', 'before'):  # "after the fridge, go to the sofa"
         rest = words[1:]
@@ -64,9 +78,28 @@ def checked(cuts: list[list[str]], words: list[str], mentions) -> list[list[str]
     return cuts
 
 
+def said_of_it(cuts: list[list[str]], mentions) -> list[list[str]] | None:
+    """
+    Return the one place of "go to the fridge, then stop two right of it", or None.
+
+    The second step is said of the landmark the first goes to and names none of its own:
+    "it" is that landmark, and the place said of it is where the robot ends up.
+    """
+    if len(cuts) != 2:
+        return None
+    first, then = cuts
+    named = mentions(first)
+    if len(named) != 1 or mentions(then) or 'it' not in then or 'its' in then:
+        return None
+    if not bare(first, named):  # "go to the fridge", not a place said of it
+        return None
+    landmark = ['the', *named[0].words]
+    return [[x for w in then for x in (landmark if w == 'it' else [w])]]
+
+
 def trimmed(cut: list[str]) -> list[str]:
     """Return a step's words without the commas, 'and' and 'first' at its ends."""
-    while cut and cut[0] in (',', 'first'):
+    while cut and cut[0] in (',', 'first', 'and'):
         cut = cut[1:]
     while cut and cut[-1] in (',', 'and'):
         cut = cut[:-1]

@@ -7,18 +7,20 @@
 """
 Natural instructions: what people say to a robot, on hand-drawn office and PuddleWorld maps.
 
-The cases (data/natural/dev.yaml and held_out.yaml) were written by hand without reading how
-the grounder reads instructions. Each names a map (rows of legend letters, a table, metres per
-cell), an instruction and what must come of it: one goal cell, any of a set of cells (a
-landmark and the free cells beside it), a decline, or an intent (a question and its referent,
-a stop, a sequence of steps). Every case goes through Grounder.ground, one grounder per table.
+The cases (data/natural/dev.yaml and held_out.yaml; requests.yaml and requests_held_out.yaml,
+the clauses around a place: conditions, courtesies, what to do on arrival, lists of places, a
+choice) were written by hand without reading how the grounder reads instructions. Each names a
+map (rows of legend letters, a table, metres per cell), an instruction and what must come of
+it: one goal cell, any of a set of cells (a landmark and the free cells beside it), a decline,
+or an intent (a question and its referent, a stop, a sequence of steps). Every case goes
+through Grounder.ground, one grounder per table.
 
 Scores: of the cases that name a cell, the share whose goal is right; of the cases that must
 send no goal, the share declined; of all, the share that sent a wrong goal (where none should
 go, or the wrong cell) at confidence 0.5 or more; where the case has an intent, the share whose
 `intent` (and a question's referent, a sequence's steps) matches. A ValueError counts as a
-decline, and is counted apart. held_out's per-case answers are left out of the results: the
-lead sees its totals only.
+decline, and is counted apart. The held-out sets' per-case answers are left out of the
+results: the lead sees their totals only.
 
     spatial-grounding natural --cases dev --out results/natural_dev.json   # and .md
 """
@@ -37,7 +39,9 @@ from .calibration import expected_calibration_error
 from ..grounder import Grounder
 
 CASES_DIR = Path(__file__).resolve().parents[1] / 'data' / 'natural'
-SETS = ('dev', 'held_out')
+SETS = ('dev', 'held_out', 'requests', 'requests_held_out')
+# the held-out sets: run for their totals only, their per-case answers left out
+HELD_OUT = ('held_out', 'requests_held_out')
 CONFIDENT = 0.5
 # the entity tables: the source tree's config/, or where the package installs it (share/)
 TABLE_DIRS = (
@@ -47,7 +51,7 @@ TABLE_DIRS = (
 CATEGORIES = (
     'offset', 'filler', 'typo', 'unit', 'near', 'extreme', 'nearest', 'negation', 'question',
     'stop', 'sequence', 'correction', 'unsupported', 'unknown', 'missing', 'ambiguous', 'offmap',
-    'obstacle', 'costly', 'long', 'noun',
+    'obstacle', 'costly', 'long', 'noun', 'condition', 'courtesy', 'arrival', 'list', 'either',
 )
 
 
@@ -65,7 +69,7 @@ def table_names(table: str) -> list[str]:
 
 
 def cases_path(cases: str | Path) -> Path:
-    """Return the file of a named set ('dev', 'held_out') or a path as given."""
+    """Return the file of a named set (SETS) or a path as given."""
     return CASES_DIR / f'{cases}.yaml' if str(cases) in SETS else Path(cases)
 
 
@@ -182,7 +186,7 @@ def run_natural(cases: str | Path = 'dev', checkpoint: str = 'pw_t-rnet-attn',
     `grounder_options`: more of Grounder.from_checkpoint's arguments (its defaults otherwise).
     """
     data = load_cases(cases)
-    detail = str(cases) != 'held_out' if detail is None else detail
+    detail = str(cases) not in HELD_OUT if detail is None else detail
     grounders, names = {}, {}
     rows = []
     for case in tqdm(data['cases'], desc=f'natural {Path(str(cases)).stem}', disable=not progress):
@@ -272,8 +276,8 @@ def cmd_natural(args) -> int:
 
 
 def register_cli(sub) -> None:
-    p = sub.add_parser('natural', help='natural instructions on hand-drawn maps (dev, held_out)')
-    p.add_argument('--cases', default='dev', help='dev, held_out, or a path to a cases YAML')
+    p = sub.add_parser('natural', help='natural instructions on hand-drawn maps (SETS)')
+    p.add_argument('--cases', default='dev', help=f'{", ".join(SETS)}, or a path to a cases YAML')
     p.add_argument('--checkpoint', default='pw_t-rnet-attn')
     p.add_argument('--json', action='store_true', help='print exactly one JSON object')
     p.add_argument('--out', default=None,

@@ -1,0 +1,176 @@
+# Copyright 2026 spatial_grounding_ros developers
+#
+# Use of this source code is governed by an MIT-style
+# license that can be found in the LICENSE file or at
+# https://opensource.org/licenses/MIT.
+
+"""
+The clauses around a place that are not the place (reading.py's intent reads them first).
+
+A courtesy ("if you can", "when you are ready") asks nothing and is dropped. A condition
+("if the kettle is on", "unless the door is closed") is one the robot cannot check, so the
+request is declined rather than carried out as if it held. What to do on arrival ("and sit
+down", "then turn left") is not where to go: its "down" and "left" say how to sit and turn,
+and must not move the goal. Two landmarks joined by "or" leave the choice open: asked back.
+"""
+
+from __future__ import annotations
+
+from .checks import DIRECTIONS, NUMBERS
+from .phrases import find_phrase
+from .vocabulary import FILLERS, GO_VERBS, MOTIONS
+
+# conditions on a request, which the robot has no sensor to check
+CONDITIONS = (
+    'if', 'only if', 'unless', 'when', 'whenever', 'once', 'as soon as', 'in case', 'provided',
+    'providing', 'assuming', 'as long as', 'so long as', 'wait until', 'wait till',
+    'wait for',
+)
+# how a condition on the world opens: its subject ("if the kettle ...", "unless someone ...",
+# "if teh door ...", whose "teh" the spelling reads as "ten").
+# Said of the robot ("when you get a sec", "stop when you reach the fridge") it is a
+# courtesy or the goal itself, which the reading reads as before.
+SUBJECTS = frozenset(
+    """
+    the a an i we they he she it nobody noone no someone somebody anyone anybody everyone
+    everybody there my your our his her their this that these those people i'm we're
+    they're he's she's it's there's nobody's someone's somebody's anyone's anybody's
+    everyone's teh
+    """.split()
+)
+# words that take "of", whose "if" is a typo of it ("left if the tree", "the side if the box")
+OF_WORDS = frozenset(DIRECTIONS) | frozenset(
+    'side edge corner top bottom end front back middle centre center row column'.split()
+)
+# ... or the robot's seeing something ("if you see the sofa, go to the fridge")
+PERCEIVING = frozenset('see spot notice find hear detect sense encounter smell'.split())
+# a courtesy worded as a condition: it holds whenever the robot is asked
+COURTESIES = (
+    'if you can', 'if you could', 'if possible', 'if you please', "if you don't mind",
+    'if you do not mind', 'if you would', 'if you like', 'when you can', 'when possible',
+    'when you are ready', "when you're ready", 'whenever you are ready',
+    "whenever you're ready", 'whenever you can', 'when you get a chance',
+    'whenever you get a chance', 'when you have a moment', 'when you have time',
+    'as soon as possible', 'as soon as you can', 'asap', 'when you are free',
+    'when you are done', "when you're done", 'when you are finished', "when you're finished",
+    "if it's not too much trouble", 'if it is not too much trouble', "if it's no trouble",
+    "if it's ok", "if it's okay", "if that's ok", "if that's okay", 'if ok',
+)
+# verbs of what to do on arrival ("go to the couch and sit down"); a go verb ("wait by the
+# door", "stop two left of it") says where only when a landmark, "it" or a count follows it
+ACTIONS = frozenset(
+    """
+    sit lie stand turn look slow calm settle rest sleep say tell beep ring knock listen watch
+    scan check shut power lower raise hand give drop put pour wash wipe vacuum sweep hold
+    relax charge dock face greet announce speak wave take grab pick fetch open close push
+    pull lift carry clean play sing dance spin rotate wait stay stop pause
+    """.split()
+) | frozenset(m.split()[0] for m in MOTIONS)
+# between an action and the place before it
+JOINS = ('and then', 'then', 'and', 'and also', 'after that', 'and after that')
+# what may stand around a landmark in a list of places ("go to the couch and to the fridge")
+BARE = GO_VERBS | FILLERS | frozenset(
+    'to the teh a an at then also first now so me us and check'.split()
+)
+# ... and "by" after a verb of visiting ("stop by the lamp and the sofa"; "the circle by the
+# house and the diamond" is one place)
+VISIT_VERBS = GO_VERBS | frozenset('swing drop pop'.split())
+# between two landmarks offered as a choice ("the fridge or maybe the couch")
+CHOICE_GAP = frozenset('or the a an to maybe perhaps possibly else'.split())
+
+
+def without_courtesies(words: list[str]) -> list[str]:
+    """Return the words without a courtesy worded as a condition ("if you can")."""
+    for i, p in reversed(find_phrase(words, COURTESIES)):
+        words = words[:i] + words[i + len(p.split()):]
+    return words
+
+
+def condition(words: list[str]) -> str | None:
+    """
+    Return a condition put on the request ("if the kettle is on"), as said, or None.
+
+    A condition opens a clause of its own, with its subject: "left if the tree" (a typo of
+    "left of") and "the house thats once space to left of tree" ("one") are places. "Until"
+    and "while" say how far or how to go ("move until it is left of block 14"), not when.
+    """
+    found = [
+        (i, p) for i, p in find_phrase(words, CONDITIONS)
+        if (words[i + len(p.split()):][:1] and words[i + len(p.split())] in SUBJECTS
+            or words[i + len(p.split()):][:2] in (['you', w] for w in PERCEIVING))
+        and (i == 0 or words[i - 1] not in OF_WORDS)
+    ]
+    if not found:
+        return None
+    i, p = found[0]
+    rest = words[i + len(p.split()):]
+    # the clause runs to the request's go verb when it opens the request, else to the end
+    end = next((k for k, w in enumerate(rest) if w in GO_VERBS), len(rest)) if i == 0 else None
+    return ' '.join([*p.split(), *rest[:end][:6]])
+
+
+def without_action(words: list[str], mentions) -> tuple[list[str], str | None]:
+    """
+    Return the words without what to do on arrival, and that action as said (or None).
+
+    An action is a clause after a place, joined by "and", "then" or a comma, that opens with an
+    action verb and names no landmark or "it" ("and sit down", "then turn left", "and wait
+    there"). "And stop two left of it" and "then stop 2 cells further north" say where.
+    """
+    # the commas are gone by now: "go to the couch, sit down" joins the action to the name
+    unjoined = [(m.end, '') for m in mentions(words) if words[m.end:m.end + 1] != []]
+    for i, p in sorted([*find_phrase(words, JOINS), *unjoined], reverse=True):
+        clause = [w for w in words[i + len(p.split()):] if w not in FILLERS]
+        if not clause or clause[0] not in ACTIONS or not mentions(words[:i]):
+            continue
+        moved = clause[0] in GO_VERBS and set(clause) & set(NUMBERS) and set(clause) & set(
+            DIRECTIONS
+        )
+        if mentions(clause) or set(clause) & {'it', 'its'} or moved:
+            continue
+        return words[:i], ' '.join(clause)
+    return words, None
+
+
+def bare(words: list[str], found: list, also=frozenset()) -> bool:
+    """Say whether every word besides the landmarks `found` only goes ("go to the", "and")."""
+    named = {k for m in found for k in range(m.start, m.end)}
+    return all(
+        w in BARE | also or w == 'by' and k and words[k - 1] in VISIT_VERBS
+        for k, w in enumerate(words)
+        if k not in named
+    )
+
+
+def listed(words: list[str], mentions) -> list[list[str]] | None:
+    """
+    Return the places of a list of landmarks joined by "and", each its own words, or None.
+
+    "go to the fridge and the couch", "the couch, the fridge and the lamp" (commas are gone
+    by now): every word is a landmark's, a go verb, an article or "and". A place said of
+    a landmark ("between the fridge and the couch", "one above the star and two left of the
+    tree") is not a list.
+    """
+    found = mentions(words)
+    if len(found) < 2 or 'and' not in words or not bare(words, found):
+        return None
+    places, start = [], 0
+    for m in found:
+        places.append([w for w in words[start:m.end] if w != 'and'])
+        start = m.end
+    return places
+
+
+def choice(words: list[str], mentions) -> bool:
+    """
+    Say whether the words leave a choice of landmarks open ("the fridge or the couch").
+
+    Two landmarks of different kinds with "or" between them and only going before them;
+    what follows ("whichever", "your call") does not matter.
+    """
+    found = mentions(words)
+    for a, b in zip(found, found[1:]):
+        gap = words[a.end:b.start]
+        if 'or' in gap and set(gap) <= CHOICE_GAP and a.kind != b.kind:
+            return bare(words[:a.start], [], {'either'})
+    return False
