@@ -112,6 +112,9 @@ class Lexicon:
         self.phrases = phrases
         self.longest = max((len(p) for p in phrases), default=0)
         self.typo_words = {p[0]: k for p, k in phrases.items() if len(p) == 1}
+        # the reading asks for the landmarks of the same words many times (each clause, step
+        # and check): each word list is read once
+        self.found = functools.lru_cache(maxsize=1024)(self._found)
 
     def word_kind(self, word: str) -> int | None:
         """Return the kind a single word names (exact, plural or typo), or None."""
@@ -154,7 +157,10 @@ class Lexicon:
 
     def mentions(self, instruction: str | list[str]) -> list[Mention]:
         """Return the landmarks an instruction names, in order, longest phrase first."""
-        words = tokenize(instruction) if isinstance(instruction, str) else list(instruction)
+        words = tokenize(instruction) if isinstance(instruction, str) else instruction
+        return list(self.found(tuple(words)))
+
+    def _found(self, words: tuple[str, ...]) -> tuple[Mention, ...]:
         found, i = [], 0
         while i < len(words):
             for n in range(min(self.longest, len(words) - i), 1, -1):
@@ -168,7 +174,7 @@ class Lexicon:
                 if kind is not None:
                     found.append(Mention(kind, i, i + 1, (words[i],)))
                 i += 1
-        return found
+        return tuple(found)
 
     def mentioned_kinds(self, instruction: str | list[str]) -> list[int]:
         """Return the kinds an instruction names, each once, in order of first mention."""

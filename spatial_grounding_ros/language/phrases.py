@@ -38,12 +38,30 @@ SPELLING_TARGETS = tuple(
 
 def phrase_at(words: list[str], i: int, phrases) -> str | None:
     """Return the longest of `phrases` (strings of words) that starts at words[i], or None."""
-    best = None
+    if i >= len(words):
+        return None
+    for said, p in by_first_word(phrases).get(words[i], ()):
+        if tuple(words[i:i + len(said)]) == said:
+            return p
+    return None
+
+
+@functools.lru_cache(maxsize=64)
+def by_first_word(phrases) -> dict[str, list[tuple[tuple[str, ...], str]]]:
+    """
+    Return `phrases` (a tuple or frozenset) by their first word, each as (words, phrase).
+
+    Longest first, and of equal length in the phrases' order: a reading looks up a few dozen
+    lists at every word, so each word sees only the phrases that can start there.
+    """
+    index: dict[str, list] = {}
     for p in phrases:
-        pw = p.split()
-        if words[i:i + len(pw)] == pw and (best is None or len(pw) > len(best.split())):
-            best = p
-    return best
+        said = tuple(p.split())
+        if said:
+            index.setdefault(said[0], []).append((said, p))
+    for entries in index.values():
+        entries.sort(key=lambda entry: -len(entry[0]))  # stable: ties keep their order
+    return index
 
 
 def find_phrase(words: list[str], phrases) -> list[tuple[int, str]]:

@@ -307,7 +307,7 @@ class Reader:
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
         notes += ('action',) if action else ()
         content = [w for w in words if w not in FILLERS]
-        said_if = condition(content) or condition(self.spelled(content)[0])
+        said_if = condition(content)
         if said_if is not None:
             return Command(text, 'unsupported', (), f'unsupported: "{said_if}" is a condition '
                            'the robot cannot check', notes)

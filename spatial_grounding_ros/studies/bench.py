@@ -157,9 +157,14 @@ def images_grounded(grounder: Grounder, grid: np.ndarray, text: str) -> int:
 
 
 def reading(grounder: Grounder, budget_s: float) -> dict:
-    """Time the reading of a new ten-word instruction (Reader.read, its cache bypassed)."""
+    """Time the reading of a new ten-word instruction (Reader.read, its caches bypassed)."""
     words = len(TEN_WORDS.split())
-    result = timed(lambda: grounder.reader._read(TEN_WORDS), budget_s, 1000, 'reading')
+
+    def read_new():
+        grounder.reader.lexicon.found.cache_clear()  # the landmarks found in its word lists
+        grounder.reader._read(TEN_WORDS)
+
+    result = timed(read_new, budget_s, 1000, 'reading')
     return {'instruction': TEN_WORDS, 'words': words, **result}
 
 
