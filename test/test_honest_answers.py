@@ -482,3 +482,25 @@ def test_what_to_do_there_does_not_move_the_goal(office, instruction, landmark):
     table, grid = office_map()
     g = office.ground(grid, instruction)
     assert beside(g, landmark), (instruction, g.goal, g.reason)
+
+
+@pytest.mark.parametrize(
+    'instruction',
+    ['go to the couch instead of the fridge', 'go to the couch rather than the fridge',
+     'instead of the fridge, go to the couch', 'rather than the fridge go to the couch'],
+)
+def test_a_place_set_aside_is_not_the_goal(office, instruction):
+    """Go to the couch when the fridge is set aside for it ("instead of", "rather than")."""
+    table, grid = office_map()
+    assert beside(office.ground(grid, instruction), (4, 3))
+
+
+@pytest.mark.parametrize(
+    'instruction, chair',
+    [('go to the chair near the couch', (2, 2)), ('go to the chair by the fridge', (8, 1)),
+     ('the chair next to the couch', (2, 2)), ('go to the chair close to the fridge', (8, 1))],
+)
+def test_a_landmark_near_another_is_the_one_nearest_it(office, instruction, chair):
+    """Of two chairs, "the chair near the couch" is the one nearest the couch."""
+    table, grid = office_map()  # chairs at (8, 1) and (2, 2), couch (4, 3), fridge (7, 8)
+    assert beside(office.ground(grid, instruction), chair)

@@ -12,6 +12,7 @@ A courtesy ("if you can", "when you are ready") asks nothing and is dropped. A c
 request is declined rather than carried out as if it held. What to do on arrival ("and sit
 down", "then turn left") is not where to go: its "down" and "left" say how to sit and turn,
 and must not move the goal. Two landmarks joined by "or" leave the choice open: asked back.
+A place set aside ("instead of the fridge", "rather than the fridge") is not the place.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ OF_WORDS = frozenset(DIRECTIONS) | frozenset(
 )
 # ... or the robot's seeing something ("if you see the sofa, go to the fridge")
 PERCEIVING = frozenset('see spot notice find hear detect sense encounter smell'.split())
+# what sets a place aside for another ("the sofa instead of the fridge")
+REJECTED = ('instead of', 'rather than', 'in place of', 'as opposed to')
 # a courtesy worded as a condition: it holds whenever the robot is asked
 COURTESIES = (
     'if you can', 'if you could', 'if possible', 'if you please', "if you don't mind",
@@ -77,6 +80,22 @@ BARE = GO_VERBS | FILLERS | frozenset(
 VISIT_VERBS = GO_VERBS | frozenset('swing drop pop'.split())
 # between two landmarks offered as a choice ("the fridge or maybe the couch")
 CHOICE_GAP = frozenset('or the a an to maybe perhaps possibly else'.split())
+
+
+def without_rejected(words: list[str], mentions) -> list[str]:
+    """
+    Return the words without a place set aside for the one meant, if any.
+
+    "go to the sofa instead of the fridge", "rather than the fridge, go to the sofa": the
+    sofa. Set aside is the first landmark after the phrase, with the words before it.
+    """
+    for i, p in reversed(find_phrase(words, REJECTED)):
+        rest = words[i + len(p.split()):]
+        found = mentions(rest)
+        kept = words[:i] + rest[found[0].end:] if found else words
+        if found and mentions(kept):
+            words = kept
+    return words
 
 
 def without_courtesies(words: list[str]) -> list[str]:

@@ -100,6 +100,10 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
     return (dr, dc) if seen and count is None else None
 
 
+# said after a landmark's name, of another ("the chair near the sofa"): the one nearest it
+NEAR_AFTER = (['near'], ['by'], ['beside'], ['next'], ['close'], ['closer'], ['nearer'])
+
+
 def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
     """Return the Landmark the words name (slots '@k' for landmarks), or None."""
     words = [w for w in words if w not in ('the', 'a', 'that', 'which', 'is', 'one')]
@@ -117,6 +121,8 @@ def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
         relation = [w for w in before + head if w not in ('to', 'from', 'away')]
         if len(relation) == 1 and relation[0] in NEAR_WORDS and before in ([], relation):
             return Landmark(name, 'closest', anchor=anchor)
+        if not before and relation in NEAR_AFTER:
+            return Landmark(name, 'closest', anchor=anchor)  # "the chair near the sofa"
         if len(relation) == 1 and relation[0] in FAR_WORDS and 'from' in before + head:
             return Landmark(name, 'farthest', anchor=anchor)
         return None

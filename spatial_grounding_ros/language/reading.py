@@ -48,7 +48,7 @@ from .checks import (
     QUALIFIERS,
     relation_reason,
 )
-from .clauses import choice, condition, without_action, without_courtesies
+from .clauses import choice, condition, without_action, without_courtesies, without_rejected
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
@@ -198,6 +198,7 @@ class Reader:
         question = self.asks(parts[-1]) or (
             text.rstrip().endswith('?') and not set(words) & GO_VERBS
         )
+        words = without_rejected(words, self.lexicon.mentions)  # "instead of the fridge"
         fixed = self.corrected(words)
         if fixed is not None:
             words = fixed
