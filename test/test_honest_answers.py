@@ -495,6 +495,13 @@ def test_a_place_set_aside_is_not_the_goal(office, instruction):
     assert beside(office.ground(grid, instruction), (4, 3))
 
 
+def test_the_other_of_two_is_asked_back(office):
+    """Decline "the other chair": which is the other needs a chair said before."""
+    table, grid = office_map()
+    for said in ('go to the other chair', 'go to another chair'):
+        assert office.ground(grid, said).reason_code == 'ambiguous', said
+
+
 @pytest.mark.parametrize(
     'instruction, chair',
     [('go to the chair near the couch', (2, 2)), ('go to the chair by the fridge', (8, 1)),

@@ -86,7 +86,7 @@ ADJECTIVES = frozenset('left right top bottom upper lower'.split())
 QUALIFIERS = EXTREME_WORDS | frozenset(
     'left right top bottom upper lower middle first second third last farthest furthest '
     'closest nearest only single lone most northern southern eastern western upmost westmost '
-    'eastmost center centre central centermost middlemost another other leftmost rightmost '
+    'eastmost center centre central centermost middlemost leftmost rightmost '
     'topmost uppermost bottommost lowermost highest lowest west east north south'.split()
 )
 # relations a person faces a landmark with, which a map seen from above has no side for
