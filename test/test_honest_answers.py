@@ -486,6 +486,19 @@ def test_what_to_do_there_does_not_move_the_goal(office, instruction, landmark):
 
 @pytest.mark.parametrize(
     'instruction',
+    ["don't go to the fridge, go to the couch", 'avoid the fridge and go to the couch',
+     "go to the couch, don't go to the fridge", 'go to the couch but not the fridge'],
+)
+def test_a_place_to_go_beside_a_negated_one_is_the_goal(office, instruction):
+    """Go to the couch when it is said beside the fridge the robot must not go to."""
+    table, grid = office_map()
+    assert beside(office.ground(grid, instruction), (4, 3))
+    for negated in ("don't go to the fridge or the couch", 'never go near the fridge'):
+        assert office.ground(grid, negated).intent == 'negation', negated
+
+
+@pytest.mark.parametrize(
+    'instruction',
     ['go to the couch instead of the fridge', 'go to the couch rather than the fridge',
      'instead of the fridge, go to the couch', 'rather than the fridge go to the couch'],
 )

@@ -45,6 +45,8 @@ OF_WORDS = frozenset(DIRECTIONS) | frozenset(
 )
 # ... or the robot's seeing something ("if you see the sofa, go to the fridge")
 PERCEIVING = frozenset('see spot notice find hear detect sense encounter smell'.split())
+# between a place negated and the place to go ("don't go to the fridge, just go to the sofa")
+JOINERS = FILLERS | frozenset('and but instead rather so then'.split())
 # what sets a place aside for another ("the sofa instead of the fridge")
 REJECTED = ('instead of', 'rather than', 'in place of', 'as opposed to')
 # a courtesy worded as a condition: it holds whenever the robot is asked
@@ -96,6 +98,29 @@ def without_rejected(words: list[str], mentions) -> list[str]:
         if found and mentions(kept):
             words = kept
     return words
+
+
+def beside_negation(words: list[str], negation: str, mentions) -> list[str] | None:
+    """
+    Return the place to go said beside a negated one, or None when there is none.
+
+    "don't go to the fridge, go to the sofa", "avoid the fridge and go to the sofa", "go to
+    the sofa, but not the fridge": the sofa. The negated part runs from `negation` to the
+    first landmark after it; the place to go names a landmark before it, or after it opens
+    with a go verb ("don't go to the fridge or the sofa" has none).
+    """
+    [(i, _), *_] = find_phrase(words, (negation,))
+    named = mentions(words[i:])
+    if not named:
+        return None
+    before, after = words[:i], words[i + named[0].end:]
+    while after and after[0] in JOINERS:
+        after = after[1:]
+    while before and before[-1] in JOINERS:
+        before = before[:-1]
+    places = [p for p in (before, after) if p and mentions(p)]
+    places = [p for p in places if p is before or p[0] in GO_VERBS]
+    return places[0] if len(places) == 1 else None
 
 
 def without_courtesies(words: list[str]) -> list[str]:

@@ -48,7 +48,9 @@ from .checks import (
     QUALIFIERS,
     relation_reason,
 )
-from .clauses import choice, condition, without_action, without_courtesies, without_rejected
+from .clauses import (
+    beside_negation, choice, condition, without_action, without_courtesies, without_rejected
+)
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import find_phrase, phrase_at, sentences, spelling
@@ -301,10 +303,14 @@ class Reader:
         if question:
             steps = (self.reference(words, cell_size),) if mentions else ()
             return Command(text, 'question', steps, notes=notes)
-        if negation is not None:
+        mentioned = self.lexicon.mentions
+        kept = None if negation is None else beside_negation(words, negation, mentioned)
+        if negation is not None and kept is None:
             return Command(
                 text, 'negation', (), f'negation: "{negation}" says where not to go', notes
             )
+        if kept is not None:  # "don't go to the fridge, go to the sofa": the sofa
+            words, mentions, notes = kept, self.lexicon.mentions(kept), (*notes, 'negation')
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
         notes += ('action',) if action else ()
         content = [w for w in words if w not in FILLERS]
