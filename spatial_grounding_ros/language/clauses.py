@@ -138,19 +138,16 @@ def condition(words: list[str]) -> str | None:
     "left of") and "the house thats once space to left of tree" ("one") are places. "Until"
     and "while" say how far or how to go ("move until it is left of block 14"), not when.
     """
-    found = [
-        (i, p) for i, p in find_phrase(words, CONDITIONS)
-        if (words[i + len(p.split()):][:1] and words[i + len(p.split())] in SUBJECTS
-            or words[i + len(p.split()):][:2] in (['you', w] for w in PERCEIVING))
-        and (i == 0 or words[i - 1] not in OF_WORDS)
-    ]
-    if not found:
-        return None
-    i, p = found[0]
-    rest = words[i + len(p.split()):]
-    # the clause runs to the request's go verb when it opens the request, else to the end
-    end = next((k for k, w in enumerate(rest) if w in GO_VERBS), len(rest)) if i == 0 else None
-    return ' '.join([*p.split(), *rest[:end][:6]])
+    for i, p in find_phrase(words, CONDITIONS):
+        rest = words[i + len(p.split()):]
+        said_of = rest[:1] and rest[0] in SUBJECTS or rest[:1] == ['you'] and (
+            rest[1:2] and rest[1] in PERCEIVING
+        )
+        if said_of and (i == 0 or words[i - 1] not in OF_WORDS):
+            # the clause runs to the request's go verb when it opens the request, else on
+            end = next((k for k, w in enumerate(rest) if w in GO_VERBS), None) if i == 0 else None
+            return ' '.join([*p.split(), *rest[:end][:6]])
+    return None
 
 
 def without_action(words: list[str], mentions) -> tuple[list[str], str | None]:
@@ -162,15 +159,13 @@ def without_action(words: list[str], mentions) -> tuple[list[str], str | None]:
     there"). "And stop two left of it" and "then stop 2 cells further north" say where.
     """
     # the commas are gone by now: "go to the couch, sit down" joins the action to the name
-    unjoined = [(m.end, '') for m in mentions(words) if words[m.end:m.end + 1] != []]
+    unjoined = [(m.end, '') for m in mentions(words) if m.end < len(words)]
     for i, p in sorted([*find_phrase(words, JOINS), *unjoined], reverse=True):
         clause = [w for w in words[i + len(p.split()):] if w not in FILLERS]
         if not clause or clause[0] not in ACTIONS or not mentions(words[:i]):
             continue
-        moved = clause[0] in GO_VERBS and set(clause) & set(NUMBERS) and set(clause) & set(
-            DIRECTIONS
-        )
-        if mentions(clause) or set(clause) & {'it', 'its'} or moved:
+        counted = any(w in NUMBERS for w in clause) and any(w in DIRECTIONS for w in clause)
+        if mentions(clause) or set(clause) & {'it', 'its'} or clause[0] in GO_VERBS and counted:
             continue
         return words[:i], ' '.join(clause)
     return words, None

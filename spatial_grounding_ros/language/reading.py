@@ -284,10 +284,6 @@ class Reader:
             rest = words[i + len(p.split()):]
             if p in ("don't", 'dont', 'do not', 'never') and rest[:1] == ['mind']:
                 continue
-            if p in ('not the', 'not to', 'not at', 'not by', 'not near') and i > 0 and (
-                words[i - 1] not in FILLERS | {',', 'but', 'and'}
-            ) and self.lexicon.mentions(words[:i]) and not set(words[:i]) & {'but'}:
-                continue  # "the fridge, not the sofa": a correction, read as the fridge
             return p
         return None
 
@@ -303,13 +299,12 @@ class Reader:
         if question:
             steps = (self.reference(words, cell_size),) if mentions else ()
             return Command(text, 'question', steps, notes=notes)
-        mentioned = self.lexicon.mentions
-        kept = None if negation is None else beside_negation(words, negation, mentioned)
-        if negation is not None and kept is None:
-            return Command(
-                text, 'negation', (), f'negation: "{negation}" says where not to go', notes
-            )
-        if kept is not None:  # "don't go to the fridge, go to the sofa": the sofa
+        if negation is not None:  # "don't go to the fridge, go to the sofa": the sofa
+            kept = beside_negation(words, negation, self.lexicon.mentions)
+            if kept is None:
+                return Command(
+                    text, 'negation', (), f'negation: "{negation}" says where not to go', notes
+                )
             words, mentions, notes = kept, self.lexicon.mentions(kept), (*notes, 'negation')
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
         notes += ('action',) if action else ()
@@ -318,9 +313,6 @@ class Reader:
         if said_if is not None:
             return Command(text, 'unsupported', (), f'unsupported: "{said_if}" is a condition '
                            'the robot cannot check', notes)
-        positive = self.without_negative_clause(words)
-        if positive is not words:
-            words, mentions = positive, self.lexicon.mentions(positive)
         motion = find_phrase(content[:2], MOTIONS)
         rest = set(content[2:])
         if motion and not rest & (GO_VERBS | set(DIRECTIONS) | set(NUMBERS) | QUALIFIERS):
@@ -357,16 +349,6 @@ class Reader:
                 text, 'sequence', tuple(self.reference(s, cell_size) for s in steps), None, notes
             )
         return Command(text, 'go', (self.reference(steps[0], cell_size),), None, notes)
-
-    def without_negative_clause(self, words: list[str]) -> list[str]:
-        """Return the words without a "not the sofa" clause beside a place to go, if any."""
-        for i, p in find_phrase(words, ('not the', 'not to', 'not at', 'not by', 'not near')):
-            end = next((j for j in range(i + 2, len(words)) if words[j] in ('but', 'and')),
-                       len(words))
-            rest = words[:i] + words[end + 1 if end < len(words) else end:]
-            if self.lexicon.mentions(rest):
-                return [w for w in rest if w != 'but']
-        return words
 
     def reference(self, words: list[str], cell_size: float | None) -> Reference:
         """Return one step's Reference: its spelling read, its slots, its reading's reason."""

@@ -56,14 +56,16 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
     if ands:
         bounds = [0, *ands, len(words)]
         cuts = [trimmed(words[a:b]) for a, b in zip(bounds, bounds[1:])]
-        if said_of_it(cuts, mentions) or checked(cuts, words, mentions) is cuts:
-            return said_of_it(cuts, mentions) or cuts
+        one = said_of_it(cuts, mentions)
+        if one or checked(cuts, words, mentions) is cuts:
+            return one or cuts
     opener = words[0] if words else None
     if opener in ('after', 'before'):  # "after the fridge, go to the sofa"
         rest = words[1:]
-        cut = next((j for j, w in enumerate(rest) if j and (w == ',' or w in GO_VERBS)), None)
+        # the commas are gone by now: the request's go verb opens the step said second
+        cut = next((j for j, w in enumerate(rest) if j and w in GO_VERBS), None)
         if cut is not None:
-            first, then = rest[:cut], rest[cut + (rest[cut] == ','):]
+            first, then = rest[:cut], rest[cut:]
             said = [first, then] if opener == 'after' else [then, first]
             return checked([trimmed(c) for c in said], words, mentions)
     return [words]
@@ -98,9 +100,9 @@ def said_of_it(cuts: list[list[str]], mentions) -> list[list[str]] | None:
 
 
 def trimmed(cut: list[str]) -> list[str]:
-    """Return a step's words without the commas, 'and' and 'first' at its ends."""
-    while cut and cut[0] in (',', 'first', 'and'):
+    """Return a step's words without 'and' and 'first' at its ends."""
+    while cut and cut[0] in ('first', 'and'):
         cut = cut[1:]
-    while cut and cut[-1] in (',', 'and'):
+    while cut and cut[-1] == 'and':
         cut = cut[:-1]
     return cut
