@@ -508,6 +508,13 @@ def test_a_place_set_aside_is_not_the_goal(office, instruction):
     assert beside(office.ground(grid, instruction), (4, 3))
 
 
+def test_a_slip_of_the_article_is_read_as_meant(office):
+    """Read "teh" as "the": the count and side around it still say the cell."""
+    table, grid = office_map()
+    assert office.ground(grid, 'go two cells left of teh couch').goal == (4, 1)
+    assert office.ground(grid, 'if teh lamp is on, go to the couch').intent == 'unsupported'
+
+
 def test_the_other_of_two_is_asked_back(office):
     """Decline "the other chair": which is the other needs a chair said before."""
     table, grid = office_map()

@@ -27,8 +27,7 @@ CONDITIONS = (
     'providing', 'assuming', 'as long as', 'so long as', 'wait until', 'wait till',
     'wait for',
 )
-# how a condition on the world opens: its subject ("if the kettle ...", "unless someone ...",
-# "if teh door ...", whose "teh" the spelling reads as "ten").
+# how a condition on the world opens: its subject ("if the kettle ...", "unless someone ...").
 # Said of the robot ("when you get a sec", "stop when you reach the fridge") it is a
 # courtesy or the goal itself, which the reading reads as before.
 SUBJECTS = frozenset(
@@ -36,7 +35,7 @@ SUBJECTS = frozenset(
     the a an i we they he she it nobody noone no someone somebody anyone anybody everyone
     everybody there my your our his her their this that these those people i'm we're
     they're he's she's it's there's nobody's someone's somebody's anyone's anybody's
-    everyone's teh
+    everyone's
     """.split()
 )
 # words that take "of", whose "if" is a typo of it ("left if the tree", "the side if the box")
@@ -75,7 +74,7 @@ ACTIONS = frozenset(
 JOINS = ('and then', 'then', 'and', 'and also', 'after that', 'and after that')
 # what may stand around a landmark in a list of places ("go to the couch and to the fridge")
 BARE = GO_VERBS | FILLERS | frozenset(
-    'to the teh a an at then also first now so me us and check'.split()
+    'to the a an at then also first now so me us and check'.split()
 )
 # ... and "by" after a verb of visiting ("stop by the lamp and the sofa"; "the circle by the
 # house and the diamond" is one place)

@@ -69,6 +69,7 @@ from .vocabulary import (
     QUESTION_OPENERS,
     REQUEST_OPENERS,
     SEQUENCE_MARKS,
+    SLIPS,
     STOP_HEADS,
     STOP_WORDS,
     UNSUPPORTED,
@@ -190,7 +191,7 @@ class Reader:
     def _read(self, text: str, cell_size: float | None = None) -> Command:
         """Return the Command of an instruction (cached: a node reads one on every map)."""
         said = count_first(in_cells(digits(unpossessed(text)), cell_size))
-        parts = [tokenize(s) for s in sentences(said)]
+        parts = [[SLIPS.get(w, w) for w in tokenize(s)] for s in sentences(said)]
         words = [w for part in parts for w in part]
         if not words:
             raise ValueError('instruction has no words')

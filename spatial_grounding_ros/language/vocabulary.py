@@ -101,6 +101,9 @@ LENGTH_UNITS = {
     'feet': 0.3048, 'yd': 0.9144, 'yard': 0.9144, 'yards': 0.9144, 'inch': 0.0254,
     'inches': 0.0254, 'km': 1000.0,
 }  # fmt: skip
+# the commonest slips of the words around a place, read as meant before anything else: the
+# spelling reads only words that move a goal, and would read "teh" as "ten"
+SLIPS = {'teh': 'the', 'hte': 'the', 'th': 'the', 'adn': 'and', 'nad': 'and'}
 # words that pass time in a request and never matter ("um okay robot ... thanks")
 FILLERS = frozenset(
     """
