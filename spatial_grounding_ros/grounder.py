@@ -58,6 +58,7 @@ MIRROR_AVERAGE_BELOW = 0.95
 # the least calibrated confidence a goal is sent with (docs/honest-answers.md has the
 # trade-off): under it a grounding declines, low-confidence
 DEFAULT_MIN_CONFIDENCE = 0.1
+CACHED_INSTRUCTIONS = 64  # whose text codes are kept: a node grounds one on new maps
 
 
 def resolve_table(entities: str | Path | EntityTable | None) -> EntityTable | None:
@@ -85,7 +86,7 @@ class Grounder:
         loaded: Loaded,
         entities: EntityTable | None = None,
         min_confidence: float = DEFAULT_MIN_CONFIDENCE,
-        cached_instructions: int = 64,
+        cached_instructions: int = CACHED_INSTRUCTIONS,
         cell_size: float | None = None,
         kinds_by: str = 'name',
         mirror_average_cells: int = MIRROR_AVERAGE_CELLS,

@@ -85,6 +85,9 @@ def test_bench_writes_every_section(tmp_path):
     ros = result['ros_end_to_end']
     assert ros['requests'] == 5 and 0 < ros['p50_ms'] <= ros['p99_ms']
     assert ros['node_rss_mb_end'] > 0
+    repeated = result['ros_end_to_end_repeated']
+    assert repeated['requests'] == 5 and 0 < repeated['p50_ms'] <= repeated['p99_ms']
+    assert '8 instructions in turn' in repeated['measured']
     mirrored = result['ros_end_to_end_mirrored']
     assert mirrored['requests'] == 5 and 0 < mirrored['p50_ms'] <= mirrored['p99_ms']
     assert ros['load_average_at_start'] >= 0 and mirrored['load_average_at_start'] >= 0

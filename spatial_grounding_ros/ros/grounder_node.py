@@ -45,6 +45,7 @@ from std_msgs.msg import Float32MultiArray, Header, String
 import torch
 
 from . import convert
+from .executors import Worker
 from .ground_service import grounding_report, intent, Poser, refuse, response
 from .grounder_parameters import PARAMETERS
 from .node_support import (
@@ -58,7 +59,6 @@ from .node_support import (
     report,
     SEE_OVERRIDES,
     spin,
-    Worker,
 )
 from .package_files import find_config
 from .qos import BURST, LATCHED
@@ -71,6 +71,9 @@ from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
 STEADY = ClockType.STEADY_TIME  # instruction_timeout is wall time, also under use_sim_time
+# the spinning thread waits this long at most for a woken grounding's goal (Worker.wake): a
+# small map's goal goes out first, a large map's grounding does not hold the inputs up
+GIVE_WAY_S = 0.02
 
 
 class GrounderNode(LifecycleNode):
@@ -286,8 +289,9 @@ class GrounderNode(LifecycleNode):
         with self.state_lock:
             self.grid, self.map_msg = grid, msg
             self.report_dropped(self.hold.expire(self.param('instruction_timeout')))
-            if self.active and self.hold.on_map(self.param('reground_on_map_change')):
-                self.topic_grounding.wake()
+            reground = self.active and self.hold.on_map(self.param('reground_on_map_change'))
+        if reground:
+            self.topic_grounding.wake(give_way=GIVE_WAY_S)
 
     def check_text(self, text: str) -> None:
         """Raise ValueError naming what is wrong with an instruction (or the node's state)."""
@@ -319,16 +323,17 @@ class GrounderNode(LifecycleNode):
         with self.state_lock:
             self.cancel_expiry()
             self.report_dropped(self.hold.hold(text))
-            if self.grid is not None:
-                self.topic_grounding.wake()
-                return
+            held_map = self.grid is not None
             timeout = self.param('instruction_timeout')
-            if timeout > 0:
+            if not held_map and timeout > 0:
                 self.expiry_timer = self.create_timer(
                     timeout,
                     self.expire_instruction,
                     clock=Clock(clock_type=STEADY),
                 )
+        if held_map:
+            self.topic_grounding.wake(give_way=GIVE_WAY_S)
+            return
         self.report(
             'instruction',
             DiagnosticStatus.WARN,
@@ -423,6 +428,7 @@ class GrounderNode(LifecycleNode):
         goal = poser.goal(result) if result.reason is None else None
         if goal is not None:
             self.goal_pub.publish(goal)
+        self.topic_grounding.answered()  # a planner's answer is out: the spinning thread goes on
         if goal is not None or intent(result) == 'stop':
             self.path_pub.publish(poser.path(result))  # a stop's is empty
         if result.values is not None and np.size(result.values):

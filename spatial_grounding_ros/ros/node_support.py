@@ -17,7 +17,6 @@ one line `<name>: error: ...` on stderr and exit status 1.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 import faulthandler
 import functools
@@ -25,7 +24,6 @@ import gc
 import math
 import os
 import sys
-import threading
 from typing import Callable, Iterable, NoReturn
 import weakref
 
@@ -40,13 +38,7 @@ from rcl_interfaces.msg import (
 import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import (
-    ConditionReachedException,
-    ExternalShutdownException,
-    ShutdownException,
-    SingleThreadedExecutor,
-    TimeoutException,
-)
+from rclpy.executors import ExternalShutdownException
 from rclpy.lifecycle import LifecyclePublisher, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -56,6 +48,7 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from std_msgs.msg import Header
 
+from .executors import make_executor
 from ..core.allocator import keep_freed_memory
 from ..core.topics import DIAGNOSTICS
 from ..training.options import range_problem, range_words
@@ -382,86 +375,6 @@ def spin(make_node: Callable[..., Node], name: str, args: list[str] | None = Non
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
-
-
-class Worker:
-    """A thread that runs `work` each time it is woken; a wake while it works runs it again."""
-
-    def __init__(self, work: Callable[[], None], name: str):
-        self.work, self.wanted, self.closing = work, threading.Event(), False
-        self.thread = threading.Thread(target=self.run, name=name, daemon=True)
-        self.thread.start()
-
-    def wake(self) -> None:
-        self.wanted.set()
-
-    def stop(self) -> None:
-        """End the thread once the work under way has ended."""
-        self.closing = True
-        self.wanted.set()
-        self.thread.join()
-
-    def run(self) -> None:
-        while True:
-            self.wanted.wait()
-            self.wanted.clear()
-            if self.closing:
-                return
-            self.work()
-
-
-class ServingExecutor(SingleThreadedExecutor):
-    """
-    Run callbacks in the spinning thread, those of `pooled` callback groups on a thread pool.
-
-    The pooled ones are requests that may wait (the grounder's service, for the model); the
-    rest are short. rclpy's MultiThreadedExecutor hands every callback to its pool, and until a
-    pool thread has started one, the spinning thread finds it still to do and hands it over
-    again, and again: a busy loop that, with the grounding thread wanting the GIL, held an
-    instruction 10-20 ms at p50 and hundreds at p99 on 2 cores. Here the spinning thread waits
-    for a pooled callback to start before it waits for more work.
-    """
-
-    def __init__(self, pooled: tuple, threads: int, context=None):
-        super().__init__(context=context)
-        self.pooled = pooled
-        self.pool = ThreadPoolExecutor(threads, thread_name_prefix='requests')
-
-    def _spin_once_impl(self, timeout_sec=None, wait_condition=lambda: False) -> None:
-        try:
-            handler, entity, _ = self.wait_for_ready_callbacks(timeout_sec, None, wait_condition)
-        except (ShutdownException, TimeoutException, ConditionReachedException):
-            return
-        if entity is None or entity.callback_group not in self.pooled:
-            handler()
-            handler.result()  # raise what the callback raised, as rclpy's executors do
-            return
-        started = threading.Event()
-
-        def run():
-            started.set()
-            handler()
-
-        self.pool.submit(run)
-        started.wait()
-
-    def shutdown(self, timeout_sec: float | None = None) -> bool:
-        done = super().shutdown(timeout_sec)
-        self.pool.shutdown(wait=False)
-        return done
-
-
-def make_executor(node: Node, context=None):
-    """
-    Return the executor a node spins in.
-
-    A ServingExecutor for a node whose requests may wait (node.pooled_groups(), on
-    node.request_threads() threads: the grounder's service), else a SingleThreadedExecutor.
-    """
-    context = context or node.context
-    if not hasattr(node, 'pooled_groups'):
-        return SingleThreadedExecutor(context=context)
-    return ServingExecutor(node.pooled_groups(), node.request_threads(), context=context)
 
 
 def _run(make_node: Callable[[], Node], name: str, args: list[str] | None) -> int:
