@@ -21,18 +21,21 @@ import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 CASES = REPO / 'spatial_grounding_ros' / 'data' / 'natural'
-# at least this many cases and maps; the requests sets: clauses around the place
-SETS = {'dev': (240, 12), 'held_out': (160, 8), 'requests': (60, 3), 'requests_held_out': (55, 3)}
+# at least this many cases and maps; the requests sets: clauses around the place; the
+# relations sets: a landmark picked by its side of another
+SETS = {'dev': (240, 12), 'held_out': (160, 8), 'requests': (60, 3), 'requests_held_out': (55, 3),
+        'relations': (30, 4), 'relations_held_out': (30, 4)}
 WORDING = {
     'offset', 'filler', 'typo', 'unit', 'near', 'extreme', 'nearest', 'negation', 'question',
     'stop', 'sequence', 'correction', 'unsupported', 'unknown', 'missing', 'ambiguous', 'offmap',
     'obstacle', 'costly', 'long', 'noun',
 }
 REQUESTS = {'condition', 'courtesy', 'arrival', 'list', 'either'}
-CATEGORIES = WORDING | REQUESTS
+RELATIONS = {'side_of', 'side_of_missing'}
+CATEGORIES = WORDING | REQUESTS | RELATIONS
 SIZES = {'office': (10, 32), 'puddleworld': (10, 15)}
 NO_GOAL = {'negation', 'question', 'stop', 'unsupported', 'unknown', 'missing', 'ambiguous',
-           'offmap', 'obstacle', 'condition', 'either'}
+           'offmap', 'obstacle', 'condition', 'either', 'side_of_missing'}
 
 
 def load(name: str) -> dict:
@@ -119,12 +122,13 @@ def test_cases_are_well_formed(name):
 
 def test_every_category_in_both_sets():
     for name in SETS:
-        kinds = REQUESTS if name.startswith('requests') else WORDING
+        kinds = {'requests': REQUESTS, 'relations': RELATIONS}.get(name.split('_')[0], WORDING)
         assert {c['category'] for c in load(name)['cases']} == kinds, name
 
 
 @pytest.mark.parametrize('dev_name, held_name', [('dev', 'held_out'),
-                                                 ('requests', 'requests_held_out')])
+                                                 ('requests', 'requests_held_out'),
+                                                 ('relations', 'relations_held_out')])
 def test_held_out_shares_no_map_or_wording_with_dev(dev_name, held_name):
     dev, held = load(dev_name), load(held_name)
     assert not set(dev['maps']) & set(held['maps'])

@@ -155,3 +155,44 @@ def test_relation_styles_are_drawn_from_all_of_places_styles():
             _, place, text, _ = sample_place(rng, family, 12)
             seen |= {s for s in range(STYLES[family]) if surface(place, s) == text}
         assert seen == set(range(family == 'nearest', STYLES[family])), (family, seen)
+
+
+# hearts at (4, 3) and (6, 8), the horse at (4, 6), the rock at (7, 8), a star at (1, 1)
+SIDE_OF = [
+    ('go to the heart to the left of the horse', (4, 3)),
+    ('on the heart to the left of horse', (4, 3)),
+    ('the heart which is west of the horse', (4, 3)),
+    ('go to the heart on the right side of the horse', (6, 8)),
+    ('reach the heart below the horse', (6, 8)),
+    ('the heart to the bottom right of the horse', (6, 8)),
+    ('heart above the rock', (6, 8)),  # both are above it: the nearer
+    ('the heart left of the westernmost horse', (4, 3)),
+    ('one cell above the heart to the left of the horse', (3, 3)),
+    ('the cell left of the heart below the horse', (6, 7)),
+    ('the heart to the top left of the horse', None),  # none there: no goal
+    ('the heart right above the horse', None),
+]
+
+
+@pytest.mark.parametrize('text, goal', SIDE_OF)
+def test_a_landmark_said_on_a_side_of_another_is_the_nearest_one_there(grounder, text, goal):
+    """
+    Pick "the heart left of the horse" among the hearts: the one on that side, nearest it.
+
+    The human PuddleWorld instructions say it so of the landmark the goal is on (224 of 228
+    that the rule reads); the network alone went beside the heart or beside the horse.
+    """
+    grid = np.zeros((10, 10), dtype=np.int64)
+    for (r, c), name in (((4, 3), 'heart'), ((6, 8), 'heart'), ((4, 6), 'horse'),
+                         ((7, 8), 'rock'), ((1, 1), 'star')):
+        grid[r, c] = PUDDLEWORLD.index(name)
+    result = grounder.ground(grid, text)
+    assert result.goal == goal, (result.goal, result.reason)
+    if goal is None:
+        assert result.reason.startswith('referent-missing: no heart')
+
+
+@pytest.mark.parametrize('side', [*SIDES, 'north-west', 'south-east'])
+def test_a_landmark_on_a_side_of_another_reads_back_as_itself(grounder, side):
+    place = Place('landmark', Landmark('heart', 'beside', side, anchor=Landmark('horse')))
+    assert read_place(grounder, surface(place, 1)) == place

@@ -151,6 +151,8 @@ def readme_section(heading: str) -> str:
         ('Results: natural wording (held out)', 'natural_held_out.md'),
         ('Results: requests (dev)', 'natural_requests.md'),
         ('Results: requests (held out)', 'natural_requests_held_out.md'),
+        ('Results: a landmark on a side of another (dev)', 'natural_relations.md'),
+        ('Results: a landmark on a side of another (held out)', 'natural_relations_held_out.md'),
     ],
 )
 def test_readme_table_is_the_results_file(heading, results_file):

@@ -155,11 +155,36 @@ class Locator:
             d = nearest_distances(centres(found), centres(anchors))
             i, reason = by_distance(d, name, anchor, landmark.pick)
             return (None if i is None else found[i]), confidence, words, reason
+        if landmark.pick == 'beside':
+            return self.beside(landmark, found, name)
         if landmark.pick is None and len(found) > 1:
             return None, 1.0, [], f'ambiguous: {len(found)} {name}s'
         values, _, words, _ = self.network(Place('landmark', landmark))
         best, confidence, _ = self.judge(values)
         return found[nearest_to(found, best)], confidence, words, None
+
+    def beside(self, landmark: Landmark, found: list, name: str):
+        """
+        Locate "the heart left of the horse": of the kind's landmarks on that side, the nearest.
+
+        On that side: centre against centre, beyond the anchor along each axis the side names.
+        None there is no such landmark (declined), two as near a tie.
+        """
+        anchors, confidence, words, reason = self.candidates(landmark.anchor)
+        if reason is not None:
+            return None, confidence, words, reason
+        anchor = landmark.anchor.name.replace('_', ' ')
+        step = np.sum([SIDES[s] for s in landmark.side.split('-')], 0)  # 'north-west': (-1, -1)
+        gaps = centres(found)[:, None] - centres(anchors)[None]  # (landmark, anchor, 2)
+        # on that side: beyond the anchor along each axis the side names (above: any column)
+        ahead = ((gaps * step > 0) | (step == 0)).all(-1)
+        # a landmark's distance to the nearest anchor it lies on the side of
+        d = np.where(ahead, np.hypot(gaps[..., 0], gaps[..., 1]), np.inf).min(1)
+        if np.isinf(d).all():
+            side = {'north': 'above', 'south': 'below'}.get(landmark.side, f'{landmark.side} of')
+            return None, confidence, words, f'referent-missing: no {name} {side} the {anchor}'
+        i, reason = by_distance(d, name, anchor, 'closest')
+        return (None if i is None else found[i]), confidence, words, reason
 
     def candidates(self, landmark: Landmark):
         """

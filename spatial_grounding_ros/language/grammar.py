@@ -13,6 +13,7 @@ The grammar, in one place:
     offset   := (count unit? direction+ ("and")?)+ ("of" | "from" | "to")?
     landmark := slot | extreme slot | ordinal slot "from the" side | ordinal-superlative slot
               | slot ("closest" | "nearest") "to"? landmark | "the"? slot "farthest from" slot
+              | slot side-word "of"? landmark   (the one on that side of it)
     between  := slot? ("halfway" | "midway" | "the midpoint")? "between" slot "and" slot
     row-col  := slot? offset slot "and" offset slot
     corner   := side side "corner" ("of the" map-word)?
@@ -65,6 +66,32 @@ def _side_pair(words: list[str]) -> str | None:
     return f'{vertical}-{horizontal}' if vertical and horizontal else None
 
 
+_SIDE_OF_STEP = {
+    (-1, 0): 'north', (1, 0): 'south', (0, -1): 'west', (0, 1): 'east',
+    (-1, -1): 'north-west', (-1, 1): 'north-east', (1, -1): 'south-west', (1, 1): 'south-east',
+}  # fmt: skip
+
+
+def _beside(name: str, head: list[str], rest: list[str], names: dict) -> Landmark | None:
+    """
+    Return "<name> <head> <rest>" as the landmark of a kind on a side of another, or None.
+
+    The side's words come first, the other landmark's after ("left of | the bottom house").
+    """
+    for k in range(1, len(head) + 1):
+        words = [w for w in head[:k] if w not in SIDE_GLUE]
+        if words[:1] == ['right'] and SIDE_WORDS.get(words[-1]) in ('north', 'south'):
+            words = words[1:]  # "right above": straight above
+        side = (_SIDE_OF_STEP.get(DIRECTIONS.get(words[0])) if len(words) == 1 else None) or (
+            _side_pair(words)
+        )
+        anchor = _landmark(head[k:] + rest, names) if side else None
+        # of its own kind it is Janner's cell beside it: "the horse above the easternmost horse"
+        if anchor is not None and anchor.name != name:
+            return Landmark(name, 'beside', side, anchor=anchor)
+    return None
+
+
 def parse_offset(words: list[str]) -> tuple[int, int] | None:
     """
     Return the offset the words say, or None if a word is no part of one.
@@ -102,11 +129,18 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
 
 # said after a landmark's name, of another ("the chair near the sofa"): the one nearest it
 NEAR_AFTER = (['near'], ['by'], ['beside'], ['next'], ['close'], ['closer'], ['nearer'])
+# skipped in a landmark's words: "the heart that's left of the horse"
+LANDMARK_GLUE = frozenset(['the', 'a', 'that', "that's", 'thats', 'which', 'is', 'one'])
+# around a side word said after a landmark's name, of another ("the heart on the left side of
+# the horse"): the one on that side of it
+SIDE_GLUE = frozenset(
+    'of on at to side directly just straight immediately located placed situated lies sits'.split()
+)
 
 
 def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
     """Return the Landmark the words name (slots '@k' for landmarks), or None."""
-    words = [w for w in words if w not in ('the', 'a', 'that', 'which', 'is', 'one')]
+    words = [w for w in words if w not in LANDMARK_GLUE]
     slots = [i for i, w in enumerate(words) if w in names]
     if not slots:
         return None
@@ -123,6 +157,10 @@ def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
             return Landmark(name, 'closest', anchor=anchor)
         if not before and relation in NEAR_AFTER:
             return Landmark(name, 'closest', anchor=anchor)  # "the chair near the sofa"
+        if not before:  # "the heart left of the horse", "... to the top left of the bottom house"
+            beside = _beside(name, head, words[slots[1]:], names)
+            if beside is not None:
+                return beside
         if len(relation) == 1 and relation[0] in FAR_WORDS and 'from' in before + head:
             return Landmark(name, 'farthest', anchor=anchor)
         return None
@@ -176,6 +214,10 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
         words = words[1:]
     if words[:2] == ['cell', 'with']:
         words = words[2:]
+    if words[:1] == ['on'] and [w for w in words[1:3] if w not in ('the', 'a')][:1] in (
+        [[w] for w in names]
+    ):  # "on the heart left of the horse": the landmark's own cell
+        words = words[1:]
     # a wall of a table that has walls is a side of the room when its middle is asked for
     sides = [names.get(w, w) if names.get(w) in EDGE_NOUNS else w for w in words]
     if not any(w in names for w in sides) and set(sides) & (MIDDLE_WORDS | {'corner'}):

@@ -53,7 +53,7 @@ ORDINALS = {
 }  # fmt: skip
 ORDINAL_WORDS = {k: w for w, k in ORDINALS.items() if w.isalpha()}
 # picks made among a kind's landmarks on the map (language/compose.py), not by the network
-PICKED = ('ordinal', 'closest', 'farthest')
+PICKED = ('ordinal', 'closest', 'farthest', 'beside')
 CORNERS = ('north-west', 'north-east', 'south-west', 'south-east')
 # the longest count along one axis, and along each of two, that the network learned; longer
 # offsets are its grounding of the learned part, shifted by the rest (one mechanism)
@@ -84,7 +84,8 @@ class Landmark:
     One landmark as said: the table's name of its kind, and what picks one of several.
 
     `pick`: None (the only one), 'extreme' (the one furthest to `side`), 'ordinal' (the
-    `rank`-th counted from `side`), 'closest' or 'farthest' (from `anchor`).
+    `rank`-th counted from `side`), 'closest' or 'farthest' (from `anchor`), 'beside' (the
+    nearest on `side` of `anchor`).
     """
 
     name: str
@@ -264,6 +265,12 @@ def landmark_words(landmark: Landmark, style: int = 0) -> str:
         anchor = landmark_words(landmark.anchor, max(style, 1))
         return [f'the {name} farthest from {anchor}', f'the {name} furthest away from {anchor}',
                 f'the furthest {name} from {anchor}'][style % 3]
+    if landmark.pick == 'beside':  # "the heart to the left of the horse", "... top left of ..."
+        anchor = landmark_words(landmark.anchor, max(style, 1))
+        if landmark.side in SIDES:
+            return f'the {name} {_STRAIGHT_SIDE[SIDES[landmark.side]]} {anchor}'
+        corner = ' '.join(_FROM_THE[s] for s in landmark.side.split('-'))  # 'top left'
+        return f'the {name} to the {corner} of {anchor}'
     if landmark.pick == 'ordinal':
         k = ORDINAL_WORDS[landmark.rank]
         side = landmark.side

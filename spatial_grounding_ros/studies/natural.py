@@ -39,9 +39,9 @@ from .calibration import expected_calibration_error
 from ..grounder import Grounder
 
 CASES_DIR = Path(__file__).resolve().parents[1] / 'data' / 'natural'
-SETS = ('dev', 'held_out', 'requests', 'requests_held_out')
+SETS = ('dev', 'held_out', 'requests', 'requests_held_out', 'relations', 'relations_held_out')
 # the held-out sets: run for their totals only, their per-case answers left out
-HELD_OUT = ('held_out', 'requests_held_out')
+HELD_OUT = ('held_out', 'requests_held_out', 'relations_held_out')
 CONFIDENT = 0.5
 # the entity tables: the source tree's config/, or where the package installs it (share/)
 TABLE_DIRS = (
@@ -52,6 +52,7 @@ CATEGORIES = (
     'offset', 'filler', 'typo', 'unit', 'near', 'extreme', 'nearest', 'negation', 'question',
     'stop', 'sequence', 'correction', 'unsupported', 'unknown', 'missing', 'ambiguous', 'offmap',
     'obstacle', 'costly', 'long', 'noun', 'condition', 'courtesy', 'arrival', 'list', 'either',
+    'side_of', 'side_of_missing',
 )
 
 
