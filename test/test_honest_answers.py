@@ -252,6 +252,24 @@ def test_the_nearest_of_several_is_the_one_nearest_the_robot(office):
     assert beside(office.ground(grid, 'go to the nearest chair'), (8, 1))
 
 
+@pytest.mark.parametrize(
+    'said',
+    ['go to the fridge and come back', 'go to the fridge, then return here',
+     'please go to the fridge and back', 'go to the fridge, grab a drink and come back'],
+)
+def test_come_back_is_a_last_step_to_where_the_robot_is(office, said):
+    """Go to the fridge, then back to the robot's cell; with no robot pose, decline."""
+    table, grid = office_map()
+    g = office.ground(grid, said, robot_cell=(5, 5))
+    assert (g.intent, g.reason) == ('sequence', None)
+    assert beside(g.steps[0], (7, 8)) and g.steps[1].goal == (5, 5)
+    g = office.ground(grid, said)
+    assert g.goal is None and g.reason.startswith('ambiguous: "back" is where the robot is')
+    # back to a landmark is a step to it
+    g = office.ground(grid, 'go to the fridge and come back to the couch', robot_cell=(5, 5))
+    assert [s.referent for s in g.steps] == [(7, 8), (4, 3)]
+
+
 def test_a_row_and_a_column_past_the_learned_counts_are_composed(grounder):
     """One landmark's row and another's column, counts past 4: geometry, not the network."""
     grid = pw_map()  # rock (3, 4), tree (5, 5), house (10, 2), star (7, 7)

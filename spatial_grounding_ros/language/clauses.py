@@ -12,7 +12,8 @@ A courtesy ("if you can", "when you are ready") asks nothing and is dropped. A c
 request is declined rather than carried out as if it held. What to do on arrival ("and sit
 down", "then turn left") is not where to go: its "down" and "left" say how to sit and turn,
 and must not move the goal. Two landmarks joined by "or" leave the choice open: asked back.
-A place set aside ("instead of the fridge", "rather than the fridge") is not the place.
+A place set aside ("instead of the fridge", "rather than the fridge") is not the place. A
+return after a place ("and come back") is one more step: back where the robot is now.
 """
 
 from __future__ import annotations
@@ -48,6 +49,12 @@ PERCEIVING = frozenset('see spot notice find hear detect sense encounter smell'.
 JOINERS = FILLERS | frozenset('and but instead rather so then'.split())
 # what sets a place aside for another ("the sofa instead of the fridge")
 REJECTED = ('instead of', 'rather than', 'in place of', 'as opposed to')
+# a return said after a place ("go to the fridge and come back"), the whole clause
+RETURNS = frozenset(tuple(r.split()) for r in (
+    'back', 'come back', 'come back here', 'come back to me', 'come straight back',
+    'come right back', 'come back again', 'return', 'return here', 'return to me', 'go back',
+    'head back', 'get back', 'back here', 'back again',
+))
 # a courtesy worded as a condition: it holds whenever the robot is asked
 COURTESIES = (
     'if you can', 'if you could', 'if possible', 'if you please', "if you don't mind",
@@ -168,6 +175,21 @@ def without_action(words: list[str], mentions) -> tuple[list[str], str | None]:
             continue
         return words[:i], ' '.join(clause)
     return words, None
+
+
+def without_return(words: list[str], mentions) -> tuple[list[str], bool]:
+    """
+    Return the words without a return said after a place, and whether there was one.
+
+    "go to the fridge and come back", "then return here", "and back": the whole clause after
+    the join is the return, and a landmark is named before it. "And come back to the sofa" names
+    a place: a step of its own.
+    """
+    for i, p in sorted(find_phrase(words, JOINS), reverse=True):
+        clause = tuple(w for w in words[i + len(p.split()):] if w not in FILLERS)
+        if clause in RETURNS and mentions(words[:i]):
+            return words[:i], True
+    return words, False
 
 
 def bare(words: list[str], found: list, also=frozenset()) -> bool:

@@ -71,6 +71,11 @@ def compose(
     if place.relation in ('corner', 'edge'):
         cells, reason = map_place(table, grid, place)
         return Composed(cells, 1.0, reason)
+    if place.relation == 'robot':  # "and come back": where it is now
+        if robot_cell is None:
+            return Composed(reason='ambiguous: "back" is where the robot is now, and its cell is '
+                            'not known')
+        return Composed([(tuple(robot_cell), 1.0)], 1.0)
     locate = Locator(table, grid, kinds, network, judge, robot_cell)
     if place.relation == 'between':
         (a, pa, wa, ra), (b, pb, wb, rb) = map(locate.candidates, (place.landmark, place.other))

@@ -104,7 +104,8 @@ class Place:
     - 'between': the midpoint of `landmark` and `other`;
     - 'row-col': the row `offset` from `landmark`, the column `other_offset` from `other`;
     - 'corner': the map's corner `side` ('north-west' ...);
-    - 'edge': the middle of the map's side `side` ('east' ...).
+    - 'edge': the middle of the map's side `side` ('east' ...);
+    - 'robot': the robot's cell when the instruction came ("go to the fridge and come back").
 
     `on`: a landmark named on the goal cell ("reach rock between star and circle").
     """
@@ -162,7 +163,7 @@ def learned_counts(place: Place) -> bool:
 
 def composed(place: Place) -> bool:
     """Say whether a place is grounded by composing the network's groundings (not read whole)."""
-    if place.relation in ('between', 'corner', 'edge'):
+    if place.relation in ('between', 'corner', 'edge', 'robot'):
         return True
     if place.relation == 'row-col':
         return not learned_counts(place)

@@ -49,7 +49,8 @@ from .checks import (
     relation_reason,
 )
 from .clauses import (
-    beside_negation, choice, condition, without_action, without_courtesies, without_rejected
+    beside_negation, choice, condition, without_action, without_courtesies, without_rejected,
+    without_return,
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
@@ -142,6 +143,10 @@ class Reference:
                 out.append(names[slot.kind])
         cut = offsets(' '.join(out))
         return cut.model_text.split(), cut.extra
+
+
+# the step of "... and come back": where the robot is when the instruction comes
+RETURN_STEP = Reference('back where the robot is now', ('back',), (), place=Place('robot'))
 
 
 @dataclass(frozen=True)
@@ -307,6 +312,7 @@ class Reader:
                     text, 'negation', (), f'negation: "{negation}" says where not to go', notes
                 )
             words, mentions, notes = kept, self.lexicon.mentions(kept), (*notes, 'negation')
+        words, back = without_return(words, self.lexicon.mentions)  # "and come back"
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
         notes += ('action',) if action else ()
         content = [w for w in words if w not in FILLERS]
@@ -345,11 +351,8 @@ class Reader:
             return Command(text, 'go', (replace(ref, reason='ambiguous: one place or another '
                                         'is named: say which'),), None, notes)
         steps = split_steps(words, self.lexicon.mentions)
-        if len(steps) > 1:
-            return Command(
-                text, 'sequence', tuple(self.reference(s, cell_size) for s in steps), None, notes
-            )
-        return Command(text, 'go', (self.reference(steps[0], cell_size),), None, notes)
+        refs = tuple(self.reference(s, cell_size) for s in steps) + (RETURN_STEP,) * back
+        return Command(text, 'sequence' if len(refs) > 1 else 'go', refs, None, notes)
 
     def reference(self, words: list[str], cell_size: float | None) -> Reference:
         """Return one step's Reference: its spelling read, its slots, its reading's reason."""
