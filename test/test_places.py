@@ -171,6 +171,7 @@ SIDE_OF = [
     ('the cell left of the heart below the horse', (6, 7)),
     ('the heart to the top left of the horse', None),  # none there: no goal
     ('the heart right above the horse', None),
+    ('the heart 5 cells left of the horse', (4, 3)),  # a count says how far: the nearer one
 ]
 
 
@@ -193,6 +194,8 @@ def test_a_landmark_said_on_a_side_of_another_is_the_nearest_one_there(grounder,
 
 
 @pytest.mark.parametrize('side', [*SIDES, 'north-west', 'south-east'])
-def test_a_landmark_on_a_side_of_another_reads_back_as_itself(grounder, side):
-    place = Place('landmark', Landmark('heart', 'beside', side, anchor=Landmark('horse')))
+@pytest.mark.parametrize('cells', [1, 3])
+def test_a_landmark_on_a_side_of_another_reads_back_as_itself(grounder, side, cells):
+    landmark = Landmark('heart', 'beside', side, cells, anchor=Landmark('horse'))
+    place = Place('landmark', landmark)
     assert read_place(grounder, surface(place, 1)) == place

@@ -183,8 +183,10 @@ class Locator:
         gaps = centres(found)[:, None] - centres(anchors)[None]  # (landmark, anchor, 2)
         # on that side: beyond the anchor along each axis the side names (above: any column)
         ahead = ((gaps * step > 0) | (step == 0)).all(-1)
-        # a landmark's distance to the nearest anchor it lies on the side of
-        d = np.where(ahead, np.hypot(gaps[..., 0], gaps[..., 1]), np.inf).min(1)
+        # its distance from the cell `rank` steps that way from the nearest anchor it lies on
+        # the side of ("the house 5 above the horse"; no count: one step)
+        off = gaps - landmark.rank * step
+        d = np.where(ahead, np.hypot(off[..., 0], off[..., 1]), np.inf).min(1)
         if np.isinf(d).all():
             side = {'north': 'above', 'south': 'below'}.get(landmark.side, f'{landmark.side} of')
             return None, confidence, words, f'referent-missing: no {name} {side} the {anchor}'

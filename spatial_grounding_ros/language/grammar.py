@@ -76,19 +76,21 @@ def _beside(name: str, head: list[str], rest: list[str], names: dict) -> Landmar
     """
     Return "<name> <head> <rest>" as the landmark of a kind on a side of another, or None.
 
-    The side's words come first, the other landmark's after ("left of | the bottom house").
+    The side's words come first, the other landmark's after ("left of | the bottom house"). A
+    count before the side ("the house 5 above the horse") is how far: its `rank`.
     """
     for k in range(1, len(head) + 1):
-        words = [w for w in head[:k] if w not in SIDE_GLUE]
+        words = [w for w in head[:k] if w not in SIDE_GLUE and w not in UNIT_WORDS]
+        count = NUMBERS.get(words[0], 1) if words else 1
+        words = words[1:] if words and words[0] in NUMBERS else words
         if words[:1] == ['right'] and SIDE_WORDS.get(words[-1]) in ('north', 'south'):
             words = words[1:]  # "right above": straight above
-        side = (_SIDE_OF_STEP.get(DIRECTIONS.get(words[0])) if len(words) == 1 else None) or (
-            _side_pair(words)
-        )
+        one = _SIDE_OF_STEP.get(DIRECTIONS.get(words[0])) if len(words) == 1 else None
+        side = one or (_side_pair(words) if words else None)
         anchor = _landmark(head[k:] + rest, names) if side else None
         # of its own kind it is Janner's cell beside it: "the horse above the easternmost horse"
         if anchor is not None and anchor.name != name:
-            return Landmark(name, 'beside', side, anchor=anchor)
+            return Landmark(name, 'beside', side, count, anchor=anchor)
     return None
 
 

@@ -268,10 +268,11 @@ def landmark_words(landmark: Landmark, style: int = 0) -> str:
                 f'the furthest {name} from {anchor}'][style % 3]
     if landmark.pick == 'beside':  # "the heart to the left of the horse", "... top left of ..."
         anchor = landmark_words(landmark.anchor, max(style, 1))
+        far = f'{_cells(landmark.rank)} ' if landmark.rank > 1 else ''  # "two cells left of"
         if landmark.side in SIDES:
-            return f'the {name} {_STRAIGHT_SIDE[SIDES[landmark.side]]} {anchor}'
+            return f'the {name} {far}{_STRAIGHT_SIDE[SIDES[landmark.side]]} {anchor}'
         corner = ' '.join(_FROM_THE[s] for s in landmark.side.split('-'))  # 'top left'
-        return f'the {name} to the {corner} of {anchor}'
+        return f'the {name} {far}to the {corner} of {anchor}'
     if landmark.pick == 'ordinal':
         k = ORDINAL_WORDS[landmark.rank]
         side = landmark.side
