@@ -199,3 +199,22 @@ def test_a_landmark_on_a_side_of_another_reads_back_as_itself(grounder, side, ce
     landmark = Landmark('heart', 'beside', side, cells, anchor=Landmark('horse'))
     place = Place('landmark', landmark)
     assert read_place(grounder, surface(place, 1)) == place
+
+
+def test_a_long_chain_of_landmarks_reads_each_tail_once(grounder):
+    """
+    Read "the rock left of the tree left of the house ..." in work linear in its landmarks.
+
+    Each landmark said of another tries several splits of the words after it; read afresh,
+    every tail was read again by every split before it (exponential: a 40-landmark request
+    held the node for minutes). Each tail is now read once.
+    """
+    from spatial_grounding_ros.language import grammar
+
+    names = ['rock', 'tree', 'house', 'star', 'heart', 'horse', 'circle', 'spade', 'diamond']
+    text = 'go to the ' + ' left of the '.join(names * 4)
+    grammar._landmark_of.cache_clear()
+    grounder.reader.read.cache_clear()
+    place = read_place(grounder, text)
+    assert place is not None and place.landmark.pick == 'beside'
+    assert grammar._landmark_of.cache_info().misses <= 10 * len(names) * 4

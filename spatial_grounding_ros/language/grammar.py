@@ -28,6 +28,8 @@ reading is asked for on every new instruction, well under a millisecond.
 
 from __future__ import annotations
 
+import functools
+
 from .checks import ADJECTIVES, DIRECTIONS, NUMBERS
 from .places import (
     EDGE_NOUNS,
@@ -142,7 +144,15 @@ SIDE_GLUE = frozenset(
 
 def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
     """Return the Landmark the words name (slots '@k' for landmarks), or None."""
-    words = [w for w in words if w not in LANDMARK_GLUE]
+    return _landmark_of(tuple(words), tuple(names.items()))
+
+
+# each tail of a reference is read once: a landmark said of another said of another ... tries
+# several splits of every tail, which read afresh took time exponential in the landmarks named
+@functools.lru_cache(maxsize=4096)
+def _landmark_of(said: tuple[str, ...], named: tuple) -> Landmark | None:
+    names = dict(named)
+    words = [w for w in said if w not in LANDMARK_GLUE]
     slots = [i for i, w in enumerate(words) if w in names]
     if not slots:
         return None
