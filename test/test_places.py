@@ -213,7 +213,7 @@ def test_a_long_chain_of_landmarks_reads_each_tail_once(grounder):
 
     names = ['rock', 'tree', 'house', 'star', 'heart', 'horse', 'circle', 'spade', 'diamond']
     text = 'go to the ' + ' left of the '.join(names * 4)
-    grammar._landmark_of.cache_clear()
+    grammar.landmark_cache_clear()
     grounder.reader.read.cache_clear()
     place = read_place(grounder, text)
     assert place is not None and place.landmark.pick == 'beside'

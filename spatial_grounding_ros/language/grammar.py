@@ -149,6 +149,11 @@ def _landmark(words: list[str], names: dict[str, str]) -> Landmark | None:
 
 # each tail of a reference is read once: a landmark said of another said of another ... tries
 # several splits of every tail, which read afresh took time exponential in the landmarks named
+def landmark_cache_clear() -> None:
+    """Forget the landmarks read so far (the bench times the reading of a new instruction)."""
+    _landmark_of.cache_clear()
+
+
 @functools.lru_cache(maxsize=4096)
 def _landmark_of(said: tuple[str, ...], named: tuple) -> Landmark | None:
     names = dict(named)

@@ -42,6 +42,7 @@ from .measure import (
 )
 from ..data.generator import generate, global_goals, local_goals, random_grid
 from ..grounder import CACHED_INSTRUCTIONS, DEFAULT_CHECKPOINT, Grounder, IMAGES
+from ..language import grammar
 from ..models.config import ModelConfig
 from ..models.registry import build_model
 from ..training.options import ranged
@@ -164,6 +165,7 @@ def reading(grounder: Grounder, budget_s: float) -> dict:
 
     def read_new():
         grounder.reader.lexicon.found.cache_clear()  # the landmarks found in its word lists
+        grammar.landmark_cache_clear()  # the landmarks its places name
         grounder.reader._read(TEN_WORDS)
 
     result = timed(read_new, budget_s, 1000, 'reading')
