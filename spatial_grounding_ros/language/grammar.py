@@ -47,6 +47,7 @@ from .places import (
     UNIT_WORDS,
 )
 from .vocabulary import GO_VERBS
+from ..core.footprints import side_of
 
 INTENSIFIERS = frozenset('right just directly straight'.split())
 OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
@@ -68,6 +69,7 @@ def _side_pair(words: list[str]) -> str | None:
     return f'{vertical}-{horizontal}' if vertical and horizontal else None
 
 
+# the side an offset's signs say, for a landmark said on a side of another
 _SIDE_OF_STEP = {
     (-1, 0): 'north', (1, 0): 'south', (0, -1): 'west', (0, 1): 'east',
     (-1, -1): 'north-west', (-1, 1): 'north-east', (1, -1): 'south-west', (1, 1): 'south-east',
@@ -78,21 +80,22 @@ def _beside(name: str, head: list[str], rest: list[str], names: dict) -> Landmar
     """
     Return "<name> <head> <rest>" as the landmark of a kind on a side of another, or None.
 
-    The side's words come first, the other landmark's after ("left of | the bottom house"). A
-    count before the side ("the house 5 above the horse") is how far: its `rank`.
+    The side's words come first, an offset along one axis or a diagonal, the other landmark's
+    after ("left of | the bottom house"). The offset's count ("the house 5 above the horse")
+    is how far: the landmark's `rank`.
     """
     for k in range(1, len(head) + 1):
-        words = [w for w in head[:k] if w not in SIDE_GLUE and w not in UNIT_WORDS]
-        count = NUMBERS.get(words[0], 1) if words else 1
-        words = words[1:] if words and words[0] in NUMBERS else words
-        if words[:1] == ['right'] and SIDE_WORDS.get(words[-1]) in ('north', 'south'):
-            words = words[1:]  # "right above": straight above
-        one = _SIDE_OF_STEP.get(DIRECTIONS.get(words[0])) if len(words) == 1 else None
-        side = one or (_side_pair(words) if words else None)
-        anchor = _landmark(head[k:] + rest, names) if side else None
+        said = [w for w in head[:k] if w not in SIDE_GLUE]
+        if said[:1] == ['over'] and len(said) > 1:  # "over on the left side of": a particle
+            said = said[1:]
+        offset = parse_offset(said)
+        if offset is None or (0 not in offset and abs(offset[0]) != abs(offset[1])):
+            continue
+        anchor = _landmark(head[k:] + rest, names)
         # of its own kind it is Janner's cell beside it: "the horse above the easternmost horse"
         if anchor is not None and anchor.name != name:
-            return Landmark(name, 'beside', side, count, anchor=anchor)
+            side = _SIDE_OF_STEP[side_of(offset)]
+            return Landmark(name, 'beside', side, max(map(abs, offset)), anchor=anchor)
     return None
 
 
