@@ -75,11 +75,14 @@ def lands(result, goal) -> bool:
         ('avoid the desk', 'negation'),
         ('anywhere but the fridge', 'negation'),
         ('never drive to the sofa', 'negation'),
+        ("don't go to the fridge, the sofa", 'negation'),  # both, or a correction: unsure
+        ('not the fridge or the sofa', 'negation'),
         ('follow me', 'unsupported'),
         ('come here', 'unsupported'),
         ('turn left', 'unsupported'),
         ('go back', 'unsupported'),
         ('go there', 'unsupported'),
+        ('go up two', 'unsupported'),
         ('go to the fridge and then the sofa', 'sequence'),
         ('first the desk, then two cells below the fridge', 'sequence'),
         ('go to the fridge after that the desk', 'sequence'),
@@ -115,6 +118,17 @@ def test_a_sequence_grounds_each_step_in_order(office):
     assert result.goal == (10, 6)  # the first step's: the node sends it first
 
 
+@pytest.mark.parametrize(
+    'text',
+    ['go to the fridge before the sofa', 'visit the fridge before you go to the sofa',
+     'go to the sofa after the fridge'],
+)
+def test_before_and_after_order_the_steps(office, text):
+    result = office.ground(office_map(office), text)
+    assert result.intent == 'sequence', (text, result.reason)
+    assert [s.referent for s in result.steps] == [(3, 3), (8, 6)]
+
+
 def test_a_one_reference_then_is_no_sequence(puddleworld):
     """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
     grid = np.zeros((10, 10), dtype=np.int64)
@@ -130,6 +144,8 @@ def test_a_one_reference_then_is_no_sequence(puddleworld):
         ('two cells below the fridge, sorry, I mean the sofa', beside((8, 6))),
         ('go one left of the sofa, sorry, I mean one right of it', (8, 7)),
         ('go to the fridge, not the sofa', beside((3, 3))),
+        ('not the sofa, the fridge', beside((3, 3))),
+        ("don't go to the desk but the sofa", beside((8, 6))),
     ],
 )
 def test_a_self_correction_means_the_last_place_said(office, text, goal):

@@ -172,6 +172,14 @@ def test_a_count_said_after_its_landmark_is_said_before_it():
     assert count_first('go above the forklift, two cells') == 'go two cells above the forklift'
     assert count_first('go by the door') == 'go by the door'  # no count: as it was
     assert count_first('go to the left of the desk') == 'go to the left of the desk'
+    # two-word sides, a side said "from", "diagonally"
+    assert count_first('go diagonally up-left from the fridge by one') == (
+        'go one diagonally up-left from the fridge'
+    )
+    assert count_first('go down and to the left of the sofa by 2 cells') == (
+        'go 2 cells down and to the left of the sofa'
+    )
+    assert count_first('go northeast of the sofa by two') == 'go two northeast of the sofa'
 
 
 def test_a_count_after_the_landmark_moves_the_goal_by_it(grounder):
@@ -179,6 +187,7 @@ def test_a_count_after_the_landmark_moves_the_goal_by_it(grounder):
     grid[6, 4] = 2  # a star
     assert grounder.ground(grid, 'go north of the star by three squares').goal == (3, 4)
     assert grounder.ground(grid, 'go north of the star by one square').goal == (5, 4)
+    assert grounder.ground(grid, 'go diagonally up-left from the star by one').goal == (5, 3)
 
 
 def test_a_side_of_its_landmark_is_said_of_the_landmark():

@@ -238,13 +238,17 @@ def moves(content: list[str]) -> bool:
     "go north", "move 2 cells to the left": a move from where the robot is, which the map
     alone does not place (the network would pick a cell by the words). A cell or a corner
     ("the top left corner", "the top left cell") is a place of the map, and a number that no
-    unit or direction follows is a name ("move the 10 above the 11": ISI's numbered blocks).
+    unit or direction follows, nor ends the words after one ("go up two"), is a name ("move
+    the 10 above the 11": ISI's numbered blocks).
     """
     if not set(content) & set(DIRECTIONS):
         return False
     for i, w in enumerate(content):
         before, after = content[i - 1] if i else None, content[i + 1:i + 2]
-        counted = bool(after) and (after[0] in COUNTED_UNITS or after[0] in DIRECTIONS)
+        # "two cells", "two left", and last after a direction: "go up two"
+        counted = (after[0] in COUNTED_UNITS or after[0] in DIRECTIONS) if after else (
+            before in DIRECTIONS
+        )
         if w in DIRECTIONS or w in MOVE_WORDS or (w in NUMBERS and counted):
             continue
         if w in COUNTED_UNITS and before in NUMBERS:

@@ -113,19 +113,25 @@ def beside_negation(words: list[str], negation: str, mentions) -> list[str] | No
     "don't go to the fridge, go to the sofa", "avoid the fridge and go to the sofa", "go to
     the sofa, but not the fridge": the sofa. The negated part runs from `negation` to the
     first landmark after it; the place to go names a landmark before it, or after it opens
-    with a go verb ("don't go to the fridge or the sofa" has none).
+    with a go verb, or is said in the negated one's place ("not the fridge, the sofa", "...
+    but the sofa"); "don't go to the fridge or the sofa" has none.
     """
     [(i, _), *_] = find_phrase(words, (negation,))
     named = mentions(words[i:])
     if not named:
         return None
     before, after = words[:i], words[i + named[0].end:]
+    joined = set()
     while after and after[0] in JOINERS:
-        after = after[1:]
+        joined.add(after.pop(0))
     while before and before[-1] in JOINERS:
         before = before[:-1]
+    # "not the sofa, the fridge", "don't go to the sofa but the fridge": said in its place
+    instead = 'but' in joined or (
+        negation.startswith('not') and not (i or joined or after[:1] == ['or'])
+    )
     places = [p for p in (before, after) if p and mentions(p)]
-    places = [p for p in places if p is before or p[0] in GO_VERBS]
+    places = [p for p in places if p is before or p[0] in GO_VERBS or instead]
     return places[0] if len(places) == 1 else None
 
 

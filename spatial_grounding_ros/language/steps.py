@@ -9,8 +9,8 @@ The steps of a several-step request, in the order they are meant (reading.py's i
 
 "the fridge, then the sofa" is two steps in the order said; "the sofa after the fridge",
 "the sofa, but first the fridge" and "before the sofa, the fridge" are the same two in the
-other order; "the fridge and the sofa" and "go to the fridge and go to the sofa" are two in
-the order said. Each step must name a landmark, and a later step said of the one before ("then
+other order; "the fridge before the sofa", "the fridge and the sofa" and "go to the fridge
+and go to the sofa" are two in the order said. Each step must name a landmark, and a later step said of the one before ("then
 to the horse on the left in that row") leaves the words one step: the network reads them.
 """
 
@@ -26,6 +26,11 @@ from .vocabulary import GO_VERBS, SEQUENCE_MARKS
 EARLIER_MARKS = (
     'but first', 'but before that', 'before that', 'after visiting', 'after going to',
     'after you go to', 'after you have been to', 'after',
+)
+# marks before the step to take second: "the fridge before the sofa"
+LATER_MARKS = (
+    'before going to', 'before you go to', 'before heading to', 'before you head to',
+    'before visiting', 'before',
 )
 # a step said of the one before
 BACK_REFERENCES = frozenset('that there it its those'.split())
@@ -47,6 +52,10 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
     for i, p in find_phrase(words, EARLIER_MARKS):
         if i > 0:  # "go to the sofa after the fridge": the fridge first
             return checked([trimmed(words[i + len(p.split()):]), trimmed(words[:i])], words,
+                           mentions)
+    for i, p in find_phrase(words, LATER_MARKS):
+        if i > 0:  # "go to the fridge before the sofa": in the order said
+            return checked([trimmed(words[:i]), trimmed(words[i + len(p.split()):])], words,
                            mentions)
     places = listed(words, mentions)  # "the fridge and the couch"
     if places:

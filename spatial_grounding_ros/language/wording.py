@@ -193,9 +193,14 @@ def unpossessed(text: str) -> str:
 # "north of the bin by two cells" (or ", two cells") -> "two cells north of the bin": the count
 # where it is read; its unit a cell's (UNITS) or a length's (units.METRIC_UNIT)
 _NUMBER_WORDS = '|'.join(w for w in NUMBERS if w.isalpha())
+# a side: one word ("left", "northeast") or two ("up-left", "bottom and to the right")
+_SIDE = (
+    r'(?:(?:north|south|up|down|top|bottom|upper|lower)[- ](?:and )?(?:to the )?'
+    r'(?:east|west|left|right)|(?:north|south)(?:east|west)?|east|west|up|down|left|right)'
+)
 _COUNT_AFTER = re.compile(
-    r'\b((?:(?:directly|right|just) )?(?:above|below|under|over|beneath|underneath|'
-    r'(?:to the )?(?:left|right|north|south|east|west) of))'
+    r'\b((?:(?:directly|right|just|diagonally|straight) )?(?:above|below|under|over|beneath|'
+    rf'underneath|(?:to the )?{_SIDE} (?:of|from)))'
     rf"((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|{_NUMBER_WORDS})"
     rf"((?: (?:{'|'.join(sorted(UNITS, key=len, reverse=True))}|{METRIC_UNIT}))?)\b"
 )
