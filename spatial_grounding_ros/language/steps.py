@@ -10,8 +10,9 @@ The steps of a several-step request, in the order they are meant (reading.py's i
 "the fridge, then the sofa" is two steps in the order said; "the sofa after the fridge",
 "the sofa, but first the fridge" and "before the sofa, the fridge" are the same two in the
 other order; "the fridge before the sofa", "the fridge and the sofa" and "go to the fridge
-and go to the sofa" are two in the order said. Each step must name a landmark, and a later step said of the one before ("then
-to the horse on the left in that row") leaves the words one step: the network reads them.
+and go to the sofa" are two in the order said. Each step must name a landmark, and a later
+step said of the one before ("then to the horse on the left in that row") leaves the words
+one step: the network reads them.
 """
 
 from __future__ import annotations
