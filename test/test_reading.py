@@ -129,6 +129,19 @@ def test_before_and_after_order_the_steps(office, text):
     assert [s.referent for s in result.steps] == [(3, 3), (8, 6)]
 
 
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('go one above the sofa and one to the left', (7, 5)),
+        ('a cell below the fridge and to the right', (4, 4)),
+        ('the 2nd cell below the fridge', (5, 3)),
+        ('the 3rd square to the left of the desk', (5, 6)),
+    ],
+)
+def test_offsets_said_around_the_landmark_and_as_ordinals(office, text, goal):
+    assert office.ground(office_map(office), text).goal == goal
+
+
 def test_a_one_reference_then_is_no_sequence(puddleworld):
     """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
     grid = np.zeros((10, 10), dtype=np.int64)

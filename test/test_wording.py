@@ -190,6 +190,15 @@ def test_a_count_after_the_landmark_moves_the_goal_by_it(grounder):
     assert grounder.ground(grid, 'go diagonally up-left from the star by one').goal == (5, 3)
 
 
+def test_a_second_description_after_a_comma_is_no_count_of_the_first(grounder):
+    assert count_first('two right of the star, two left of the heart') == (
+        'two right of the star, two left of the heart'
+    )
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[6, 4], grid[6, 8] = 2, 5  # a star, a heart
+    assert grounder.ground(grid, 'two right of the star, two left of the heart').goal == (6, 6)
+
+
 def test_a_side_of_its_landmark_is_said_of_the_landmark():
     words = 'reach the star and one to its left'.split()
     assert side_of_it(words, [2]) == 'reach one to the left of the star'.split()

@@ -9,7 +9,7 @@ The grammar of a place: a reference's words, each landmark one slot, read back i
 
 The grammar, in one place:
 
-    place    := offset? landmark | between | row-col | corner | edge
+    place    := offset? landmark ("and" offset)? | between | row-col | corner | edge
     offset   := (count unit? direction+ ("and")?)+ ("of" | "from" | "to")?
     landmark := slot | extreme slot | ordinal slot "from the" side | ordinal-superlative slot
               | slot ("closest" | "nearest") "to"? landmark | "the"? slot "farthest from" slot
@@ -272,14 +272,23 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
                      Landmark(names[words[slots[1]]]), second, on=on)
     if on is not None:
         return None
+    # an offset along the other axis said after the landmark: "one above the rock and one to
+    # the left", "a cell above the rock and to the left"
+    after = (0, 0)
+    if len(slots) == 1 and words[slots[0] + 1:slots[0] + 2] == ['and']:
+        after = parse_offset(words[slots[0] + 2:])
+        if after is None:
+            return None
+        words = words[:slots[0] + 1]
     # an offset, then the landmark: the offset ends at "of"/"from"/"to"/a count's direction
     start = _landmark_start(words, slots[0])
     offset = (0, 0)
     if start:
         offset = parse_offset(words[:start])
-        if offset is None:
+        if offset is None or (offset[0] and after[0]) or (offset[1] and after[1]):
             return None
     landmark = _landmark(words[start:], names)
+    offset = (offset[0] + after[0], offset[1] + after[1])
     return None if landmark is None else Place('landmark', landmark, offset)
 
 

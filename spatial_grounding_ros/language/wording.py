@@ -74,9 +74,11 @@ PHRASES = {
     'cell': ['square', 'spot', 'tile', 'space', 'position', 'place', 'location', 'area'],
     # an ordinal cell is a count: "the second square below the sink"
     **{
-        f'cell {count}': [f'{ordinal} {unit}' for unit in 'cell square space spot tile'.split()]
-        for count, ordinal in zip(('one', 'two', 'three', 'four'),
-                                  ('first', 'second', 'third', 'fourth'))
+        f'cell {count}': [f'{ordinal} {unit}' for unit in 'cell square space spot tile'.split()
+                          for ordinal in ordinals]
+        for count, ordinals in zip(('one', 'two', 'three', 'four'),
+                                   (('first', '1st'), ('second', '2nd'), ('third', '3rd'),
+                                    ('fourth', '4th')))
     },
     'one': ['1'],
     'two': ['2'],
@@ -198,11 +200,15 @@ _SIDE = (
     r'(?:(?:north|south|up|down|top|bottom|upper|lower)[- ](?:and )?(?:to the )?'
     r'(?:east|west|left|right)|(?:north|south)(?:east|west)?|east|west|up|down|left|right)'
 )
+_DIRECTION = (
+    r'(?:(?:directly|right|just|diagonally|straight) )?(?:above|below|under|over|beneath|'
+    rf'underneath|(?:to the )?{_SIDE} (?:of|from))'
+)
+_UNIT = rf"(?: (?:{'|'.join(sorted(UNITS, key=len, reverse=True))}|{METRIC_UNIT}))"
 _COUNT_AFTER = re.compile(
-    r'\b((?:(?:directly|right|just|diagonally|straight) )?(?:above|below|under|over|beneath|'
-    rf'underneath|(?:to the )?{_SIDE} (?:of|from)))'
-    rf"((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|{_NUMBER_WORDS})"
-    rf"((?: (?:{'|'.join(sorted(UNITS, key=len, reverse=True))}|{METRIC_UNIT}))?)\b"
+    rf"\b({_DIRECTION})((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|{_NUMBER_WORDS})"
+    # not the count of a second description: "two right of the heart, one left of the horse"
+    rf'(?!{_UNIT}? (?:{_DIRECTION}|{_SIDE})\b)({_UNIT}?)\b'
 )
 
 
