@@ -142,6 +142,13 @@ def test_offsets_said_around_the_landmark_and_as_ordinals(office, text, goal):
     assert office.ground(office_map(office), text).goal == goal
 
 
+def test_halfway_to_a_landmark_is_from_the_robot(office):
+    grid = office_map(office)
+    assert office.ground(grid, 'go halfway to the fridge', robot_cell=(7, 3)).goal == (5, 3)
+    unknown = office.ground(grid, 'go halfway to the fridge')
+    assert unknown.goal is None and unknown.reason.startswith('ambiguous: said of the robot')
+
+
 def test_a_one_reference_then_is_no_sequence(puddleworld):
     """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
     grid = np.zeros((10, 10), dtype=np.int64)

@@ -202,7 +202,7 @@ class Locator:
         """
         if landmark.name == ROBOT:
             if self.robot_cell is None:
-                return [], 1.0, [], 'ambiguous: nearest to the robot, whose cell is not known'
+                return [], 1.0, [], 'ambiguous: said of the robot, whose cell is not known'
             return [np.array([self.robot_cell])], 1.0, [], None
         found = instances(self.grid, self.kinds[landmark.name], self.table.has_footprints)
         if landmark.pick is None and len(found) > 1:

@@ -15,6 +15,7 @@ The grammar, in one place:
               | slot ("closest" | "nearest") "to"? landmark | "the"? slot "farthest from" slot
               | slot side-word "of"? landmark   (the one on that side of it)
     between  := slot? ("halfway" | "midway" | "the midpoint")? "between" slot "and" slot
+              | ("halfway" | "midway") "to" landmark   (from the robot's cell)
     row-col  := slot? offset slot "and" offset slot
     corner   := side side "corner" ("of the" map-word)?
     edge     := ("middle" | "centre") "of the" side ("wall" | "edge" | "side") ("of the" map)?
@@ -251,6 +252,11 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     if slots[0] == 0 and (words[1:2] == ['between'] or len(slots) == 3):
         on, words = names[words[0]], words[1:]
         slots = [i - 1 for i in slots[1:]]
+    start = _landmark_start(words, slots[0])
+    lead = [w for w in words[:start] if w not in PLACE_NOUNS]
+    if len(slots) == 1 and lead[-1:] == ['to'] and lead[:-1] in [[w] for w in HALFWAY_WORDS]:
+        landmark = _landmark(words[start:], names)  # "halfway to the fridge": from the robot
+        return None if landmark is None else Place('between', Landmark(ROBOT), other=landmark)
     if 'between' in words:
         k = words.index('between')
         lead = [w for w in words[:k] if w not in PLACE_NOUNS]
