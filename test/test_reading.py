@@ -192,6 +192,8 @@ def test_a_misspelt_direction_is_read_as_meant(office, text):
         ('two cells to the rigth of the sofa', (8, 8)),
         ('go to the fridgee', beside((3, 3))),
         ('two cells to the left of the sfoa', (8, 4)),
+        ('go tow cells right of the sofa', (8, 8)),  # a count before a unit, not "top"
+        ('go 2 the fridge', beside((3, 3))),  # a texter's "to"
     ],
 )
 def test_misspellings_of_relations_and_names(office, text, goal):
@@ -204,6 +206,7 @@ def test_a_word_not_understood_where_it_changes_the_goal_declines(office):
     assert result.goal is None and result.reason_code == 'unreadable'
     assert 'xqzv' in result.reason
     assert office.ground(grid, 'go to the fr dge').reason_code == 'unreadable'
+    assert office.ground(grid, 'go xqz cells left of the sofa').reason == 'unreadable: "xqz"'
     # filler and politeness never matter
     assert office.ground(grid, 'um okay robot kindly go two cells below the sofa thanks').goal == (
         10, 6

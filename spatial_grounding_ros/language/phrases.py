@@ -21,7 +21,7 @@ from rapidfuzz.distance import OSA
 
 from .checks import DIRECTIONS, EXTREME_SIDES, NUMBERS
 from .lexicon import RELATION_WORDS
-from .vocabulary import LENGTH_UNITS
+from .vocabulary import GO_VERBS, LENGTH_UNITS
 from .wording import UNITS
 
 # the words a misspelt word may be read as (one edit; two for words of seven letters or more):
@@ -85,14 +85,26 @@ def sentences(text: str) -> list[str]:
     return [s.strip() for s in _SENTENCE_END.split(text) if s and s.strip(' ,')]
 
 
+# a count's words: what a misspelt word before a unit ("tow cells") is
+COUNT_WORDS = tuple(sorted(w for w in NUMBERS if w.isalpha()))
+
+
 @functools.lru_cache(maxsize=4096)
-def spelling(word: str) -> str | None:
+def spelling(word: str, targets: tuple[str, ...] = SPELLING_TARGETS) -> str | None:
     """Return the relation word a misspelt word is one edit from (two if long), or None."""
     if len(word) < 3:
         return None
     limit = 1 if len(word) < 7 else 2
-    found = process.extract(word, SPELLING_TARGETS, scorer=OSA.distance, score_cutoff=limit,
-                            limit=2)
+    found = process.extract(word, targets, scorer=OSA.distance, score_cutoff=limit, limit=2)
     if not found or (len(found) > 1 and found[1][1] == found[0][1]):
         return None
     return found[0][0]
+
+
+def texted(words: list[str]) -> list[str]:
+    """Return the words with a texter's "2" for "to" read as "to": "go 2 the fridge"."""
+    return [
+        'to' if w == '2' and words[i + 1:i + 2] in (['the'], ['a'], ['an'], ['my'])
+        and (not i or words[i - 1] in GO_VERBS) else w
+        for i, w in enumerate(words)
+    ]

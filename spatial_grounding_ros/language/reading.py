@@ -54,7 +54,7 @@ from .clauses import (
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
-from .phrases import find_phrase, phrase_at, sentences, spelling
+from .phrases import COUNT_WORDS, find_phrase, phrase_at, sentences, spelling, texted
 from .places import Place, PLACE_WORDS
 from .steps import steps as split_steps
 from .units import digits, in_cells, LEARNED_COUNT, offsets
@@ -196,7 +196,7 @@ class Reader:
     def _read(self, text: str, cell_size: float | None = None) -> Command:
         """Return the Command of an instruction (cached: a node reads one on every map)."""
         said = count_first(in_cells(digits(unpossessed(text)), cell_size))
-        parts = [[SLIPS.get(w, w) for w in tokenize(s)] for s in sentences(said)]
+        parts = [texted([SLIPS.get(w, w) for w in tokenize(s)]) for s in sentences(said)]
         words = [w for part in parts for w in part]
         if not words:
             raise ValueError('instruction has no words')
@@ -395,7 +395,9 @@ class Reader:
             if w in self.known or w.isdigit() or any(m.start <= i < m.end for m in mentions):
                 out.append(w)
                 continue
-            meant = spelling(w)
+            # before a unit it is a count: "tow cells" (not "top")
+            counts = words[i + 1:i + 2] and words[i + 1] in UNITS
+            meant = spelling(w, COUNT_WORDS) if counts else spelling(w)
             if meant is not None:
                 spelled.append((w, meant))
             out.append(meant or w)
@@ -442,6 +444,8 @@ class Reader:
                 prev in UNITS and i > 1 and words[i - 2] in NUMBERS
             )
             if counted and (nxt in DIRECTION_ENDS or any(m.start == i + 1 for m in mentions)):
+                return f'unreadable: "{w}"'
+            if nxt in UNITS and i < first:  # where the count goes: "go xqz cells left of"
                 return f'unreadable: "{w}"'
         if not mentions:
             for i, w in enumerate(words):
