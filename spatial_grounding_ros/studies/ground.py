@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.footprints import footprints
 from ..grounder import Grounder, Grounding
 from ..language.checks import said
 from ..training.options import ranged
@@ -81,11 +82,7 @@ def draw(grid: np.ndarray, grounder: Grounder, g: Grounding, path: str | Path) -
     table = grounder.entities
     fig, (ax_map, ax_val) = plt.subplots(1, 2, figsize=(10, 5))
     ax_map.imshow(np.isin(grid, table.obstacles), cmap='Greys', vmin=0, vmax=1.5)
-    for (r, c), kind in np.ndenumerate(grid):
-        if kind != table.free_kind and kind not in table.obstacles:
-            # a dot on the landmark's cell, its whole name under it
-            ax_map.plot(c, r, 's', color='tab:blue', ms=5)
-            ax_map.text(c, r + 0.3, said(table, kind), ha='center', va='top', fontsize=7)
+    label_landmarks(ax_map, grid, table)
     ax_val.imshow(g.values, cmap='viridis')
     for ax in (ax_map, ax_val):
         for (r, c), _ in g.alternatives:
@@ -106,6 +103,35 @@ def draw(grid: np.ndarray, grounder: Grounder, g: Grounding, path: str | Path) -
     fig.savefig(path, dpi=80)
     plt.close(fig)
     return path
+
+
+def label_landmarks(ax, grid: np.ndarray, table) -> None:
+    """
+    Mark each landmark's cells and write its name once, by its middle.
+
+    A name goes under the landmark, else over it, else further off, wherever it covers no
+    name written before (adjacent landmarks' names overlapped).
+    """
+    renderer = ax.figure.canvas.get_renderer()
+    placed = []
+    for kind in np.unique(grid):
+        if kind == table.free_kind or kind in table.obstacles:
+            continue
+        for cells in footprints(grid, int(kind)):
+            ax.plot(cells[:, 1], cells[:, 0], 's', color='tab:blue', ms=5, ls='')
+            r, c = cells.mean(0)
+            low, high = cells[:, 0].max() + 0.3, cells[:, 0].min() - 0.3
+            spots = ((low, 'top'), (high, 'bottom'), (low + 0.6, 'top'), (high - 0.6, 'bottom'))
+            for y, va in spots:
+                text = ax.text(c, y, said(table, kind), ha='center', va=va, fontsize=7)
+                box = text.get_window_extent(renderer)
+                if not any(box.overlaps(other) for other in placed):
+                    break
+                text.remove()
+            else:
+                box = ax.text(c, low, said(table, kind), ha='center', va='top',
+                              fontsize=7).get_window_extent(renderer)
+            placed.append(box)
 
 
 def cmd_ground(args) -> int:
