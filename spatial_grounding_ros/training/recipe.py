@@ -150,9 +150,10 @@ class TrainConfig:
         low=0.01,
     )
     learn_goal_scale: bool = option(False, "learn the goal logits' temperature")
-    select: str = option(
-        'pq', 'keep the epoch of the second half with the best validation PQ plus '
-        'generated-validation HIT (ties: MSE), or the lowest MSE of all epochs',
+    select: str | None = option(
+        None, 'keep the epoch of the second half with the best validation PQ plus '
+        "generated-validation HIT (ties: MSE), or the lowest MSE of all epochs (default: the "
+        "task's)",
         choices=('pq', 'mse'),
     )
     paper_model: bool = option(
