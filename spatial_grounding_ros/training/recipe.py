@@ -152,7 +152,7 @@ class TrainConfig:
     learn_goal_scale: bool = option(False, "learn the goal logits' temperature")
     select: str | None = option(
         None, 'keep the epoch of the second half with the best validation PQ plus '
-        "generated-validation HIT (ties: MSE), or the lowest MSE of all epochs (default: the "
+        'generated-validation HIT (ties: MSE), or the lowest MSE of all epochs (default: the '
         "task's)",
         choices=('pq', 'mse'),
     )
