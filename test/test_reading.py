@@ -149,6 +149,14 @@ def test_halfway_to_a_landmark_is_from_the_robot(office):
     assert unknown.goal is None and unknown.reason.startswith('ambiguous: said of the robot')
 
 
+def test_which_of_a_kind_said_after_it_or_left_to_the_robot(office):
+    grid = office_map(office)  # chairs at (2, 8) and (9, 2)
+    for text in ('go to the chair on the right', 'go to the chair, the one at the top'):
+        assert lands(office.ground(grid, text), beside((2, 8))), text
+    assert lands(office.ground(grid, 'go to any chair', robot_cell=(8, 3)), beside((9, 2)))
+    assert office.ground(grid, 'go to either chair').reason.startswith('ambiguous: said of')
+
+
 def test_a_one_reference_then_is_no_sequence(puddleworld):
     """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
     grid = np.zeros((10, 10), dtype=np.int64)

@@ -33,6 +33,7 @@ import functools
 
 from .checks import ADJECTIVES, DIRECTIONS, NUMBERS
 from .places import (
+    ANY_WORDS,
     EDGE_NOUNS,
     FAR_WORDS,
     HALFWAY_WORDS,
@@ -51,6 +52,7 @@ from .vocabulary import GO_VERBS
 from ..core.footprints import side_of
 
 INTENSIFIERS = frozenset('right just directly straight'.split())
+_COMPASS = frozenset('north south east west'.split())
 OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
 _VERB_TO = [[w, 'to'] for w in ('over', 'up', 'down', 'out', 'back', 'on')]
 # what the place is called before a between: "the point halfway between"
@@ -187,12 +189,18 @@ def _landmark_of(said: tuple[str, ...], named: tuple) -> Landmark | None:
         return None
     if not before and not after:
         return Landmark(name)
-    if len(before) == 1 and not after and before[0] in NEAR_WORDS:  # "the nearest chair"
+    # "the nearest chair"; "any chair", "either chair": the one nearest the robot
+    if len(before) == 1 and not after and before[0] in NEAR_WORDS | ANY_WORDS:
         return Landmark(name, 'closest', anchor=Landmark(ROBOT))
     if len(before) == 1 and not after and before[0] in SUPERLATIVES:
         return Landmark(name, 'extreme', SUPERLATIVES[before[0]])
     if len(before) == 1 and not after and before[0] in ADJECTIVES:  # "the bottom house"
         return Landmark(name, 'extreme', SIDE_WORDS[before[0]])
+    # "the heart on the left", "the heart, the one at the bottom", "the chair on the left side"
+    if not before and after[:1] in (['on'], ['at'], ['in']) and after[2:] in ([], ['side']) and (
+        after[1:2] and after[1] in ADJECTIVES | _COMPASS
+    ):
+        return Landmark(name, 'extreme', SIDE_WORDS[after[1]])
     if before and before[0] in ORDINALS:
         rank = ORDINALS[before[0]]
         if len(before) == 2 and before[1] in SUPERLATIVES and not after:
@@ -310,7 +318,7 @@ def _landmark_start(words: list[str], slot: int) -> int:
     """Return where the landmark's words begin: after the offset's last direction word."""
     i = slot
     while i > 0 and (words[i - 1] in ORDINALS or words[i - 1] in SUPERLATIVES
-                     or words[i - 1] in FAR_WORDS | NEAR_WORDS | {'the', 'a'}):
+                     or words[i - 1] in FAR_WORDS | NEAR_WORDS | ANY_WORDS | {'the', 'a'}):
         i -= 1
     # a side word right before the name picks the landmark: "left of the bottom house"
     while i > 0 and words[i - 1] in ADJECTIVES:

@@ -69,10 +69,11 @@ ROBOT = 'robot'
 FAR_WORDS = frozenset('farthest furthest'.split())
 MIDDLE_WORDS = frozenset('middle centre center midpoint'.split())
 HALFWAY_WORDS = frozenset('halfway midway midpoint'.split())
+ANY_WORDS = frozenset('any either whichever'.split())  # "any chair": the nearest the robot
 # the words a place's grammar reads besides slots, counts and directions (reading.py knows them)
 PLACE_WORDS = (
     frozenset(ORDINALS) | frozenset(SUPERLATIVES) | UNIT_WORDS | MAP_NOUNS | EDGE_NOUNS
-    | NEAR_WORDS | FAR_WORDS | MIDDLE_WORDS | HALFWAY_WORDS
+    | NEAR_WORDS | FAR_WORDS | MIDDLE_WORDS | HALFWAY_WORDS | ANY_WORDS
     | frozenset('corner between from of to the a and away with cell counting diagonally point spot'
                 .split())
 )  # fmt: skip

@@ -301,7 +301,11 @@ def side_of_it(words: list[str], names: Iterable[int]) -> list[str]:
     if len(sides) != 1:
         return words
     at = sides[0]
-    count = [w for w in words[name + 1:at] if w in COUNTS][:1]
+    # "the heart, the one on the left": no count, the heart said again
+    count = [
+        w for k, w in enumerate(words[name + 1:at], name + 1)
+        if w in COUNTS and not (w == 'one' and words[k - 1] in ('the', 'that', 'this'))
+    ][:1]
     opening = words[:1] if words[0] in OPENING_VERBS else []
     # the landmark with the words that say which: "the blue star"
     start = max([i + 1 for i in range(len(opening), name) if words[i] in ARTICLES], default=name)
