@@ -157,6 +157,26 @@ def test_which_of_a_kind_said_after_it_or_left_to_the_robot(office):
     assert office.ground(grid, 'go to either chair').reason.startswith('ambiguous: said of')
 
 
+@pytest.mark.parametrize(
+    'text, referents',
+    [
+        ('go to the fridge, grab a drink, and bring it to the sofa', [(3, 3), (8, 6)]),
+        ('pick up the cup from the fridge and bring it to the desk', [(3, 3), (5, 9)]),
+        ('get a soda from the fridge', [(3, 3)]),  # "soda" is no typo of "sofa" here
+        ('take the box from the sofa to the fridge', [(8, 6), (3, 3)]),
+    ],
+)
+def test_a_fetch_goes_where_things_are_taken_from_and_to(office, text, referents):
+    result = office.ground(office_map(office), text)
+    got = [s.referent for s in result.steps] if result.steps else [result.referent]
+    assert got == referents, (text, result.reason)
+
+
+def test_bring_me_comes_back_to_the_robot(office):
+    result = office.ground(office_map(office), 'bring me a cup from the desk', robot_cell=(7, 2))
+    assert result.intent == 'sequence' and result.steps[-1].goal == (7, 2)
+
+
 def test_a_one_reference_then_is_no_sequence(puddleworld):
     """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
     grid = np.zeros((10, 10), dtype=np.int64)

@@ -54,6 +54,9 @@ RETURNS = frozenset(tuple(r.split()) for r in (
     'back', 'come back', 'come back here', 'come back to me', 'come straight back',
     'come right back', 'come back again', 'return', 'return here', 'return to me', 'go back',
     'head back', 'get back', 'back here', 'back again',
+    # what is fetched, brought to the one who asked: "grab the mug ... and bring it to me"
+    'bring it to me', 'bring it back', 'bring it back to me', 'bring it here', 'bring it over',
+    'bring them to me', 'bring them back', 'bring them here',
 ))
 # a courtesy worded as a condition: it holds whenever the robot is asked
 COURTESIES = (
@@ -77,6 +80,8 @@ ACTIONS = frozenset(
     pull lift carry clean play sing dance spin rotate wait stay stop pause
     """.split()
 ) | frozenset(m.split()[0] for m in MOTIONS)
+# what a fetch opens with: "get a soda from the fridge"
+FETCH_VERBS = frozenset('get grab pick fetch take collect bring'.split())
 # between an action and the place before it
 JOINS = ('and then', 'then', 'and', 'and also', 'after that', 'and after that')
 # what may stand around a landmark in a list of places ("go to the couch and to the fridge")
@@ -181,6 +186,27 @@ def without_action(words: list[str], mentions) -> tuple[list[str], str | None]:
             continue
         return words[:i], ' '.join(clause)
     return words, None
+
+
+def fetched(words: list[str], mentions) -> tuple[list[str], bool]:
+    """
+    Return the words with a fetch's source said as the place to go, and whether it is brought.
+
+    "pick up the cup from the fridge and ...", "get a soda from the fridge": the place after
+    "from" is where to go, whatever the thing fetched is called ("soda" is no typo of "sofa"
+    there); "from the sofa to the desk" is two steps; "bring me a cup from the fridge" and "get
+    me ..." bring it back: the robot's cell next.
+    """
+    if not words or words[0] not in FETCH_VERBS or 'from' not in words:
+        return words, False
+    rest = words[words.index('from') + 1:]
+    found = mentions(rest)
+    if not found:
+        return words, False
+    end = found[0].end
+    if rest[end:end + 1] == ['to'] and mentions(rest[end + 1:]):  # "from the sofa to the desk"
+        rest = [*rest[:end], 'then', 'go', 'to', *rest[end + 1:]]
+    return ['go', 'to', *rest], words[1:2] == ['me'] and 'then' not in rest
 
 
 def without_return(words: list[str], mentions) -> tuple[list[str], bool]:

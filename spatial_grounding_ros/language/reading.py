@@ -49,8 +49,8 @@ from .checks import (
     relation_reason,
 )
 from .clauses import (
-    beside_negation, choice, condition, without_action, without_courtesies, without_rejected,
-    without_return,
+    beside_negation, choice, condition, fetched, without_action, without_courtesies,
+    without_rejected, without_return,
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
@@ -312,7 +312,9 @@ class Reader:
                     text, 'negation', (), f'negation: "{negation}" says where not to go', notes
                 )
             words, mentions, notes = kept, self.lexicon.mentions(kept), (*notes, 'negation')
+        words, brought = fetched(words, self.lexicon.mentions)  # "get a soda from the fridge"
         words, back = without_return(words, self.lexicon.mentions)  # "and come back"
+        back = back or brought
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
         notes += ('action',) if action else ()
         content = [w for w in words if w not in FILLERS]

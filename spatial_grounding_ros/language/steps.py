@@ -35,6 +35,8 @@ LATER_MARKS = (
 )
 # a step said of the one before
 BACK_REFERENCES = frozenset('that there it its those'.split())
+# ... but not what a step carries: "and bring it to the sofa"
+CARRY_VERBS = frozenset('bring take carry deliver'.split())
 
 
 def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[str]]:
@@ -85,7 +87,8 @@ def checked(cuts: list[list[str]], words: list[str], mentions) -> list[list[str]
     """Return the cuts as steps if each names a landmark and none is said of another."""
     if len(cuts) < 2 or not all(cuts) or not all(mentions(c) for c in cuts):
         return [words]
-    if any(set(c) & BACK_REFERENCES for c in cuts[1:]):
+    if any(w in BACK_REFERENCES and c[k - 1:k] not in ([v] for v in CARRY_VERBS)
+           for c in cuts[1:] for k, w in enumerate(c)):
         return [words]
     return cuts
 
