@@ -14,6 +14,8 @@ The grammar, in one place:
     landmark := slot | extreme slot | ordinal slot "from the" side | ordinal-superlative slot
               | slot ("closest" | "nearest") "to"? landmark | "the"? slot "farthest from" slot
               | slot side-word "of"? landmark   (the one on that side of it)
+              | slot ("on" | "at" | "in") side-word "side"?   (the one farthest that way)
+              | ("nearest" | "any" | "either" | "whichever") slot   (the one nearest the robot)
     between  := slot? ("halfway" | "midway" | "the midpoint")? "between" slot "and" slot
               | ("halfway" | "midway") "to" landmark   (from the robot's cell)
     row-col  := slot? offset slot "and" offset slot
