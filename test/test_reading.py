@@ -177,6 +177,13 @@ def test_bring_me_comes_back_to_the_robot(office):
     assert result.intent == 'sequence' and result.steps[-1].goal == (7, 2)
 
 
+def test_a_superlative_in_two_words(puddleworld):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[2, 1] = grid[5, 4] = grid[8, 7] = 11  # three horses
+    assert puddleworld.ground(grid, 'go to second most western horse .').goal == (5, 4)
+    assert puddleworld.ground(grid, 'go to the most western horse').goal == (2, 1)
+
+
 def test_a_one_reference_then_is_no_sequence(puddleworld):
     """Human PuddleWorld: "one up then one left from the spade" is one place, not two steps."""
     grid = np.zeros((10, 10), dtype=np.int64)

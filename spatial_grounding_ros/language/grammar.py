@@ -227,6 +227,7 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     `words`: the reference's words with each landmark as one slot word; `names`: each slot
     word's landmark (the table's name of its kind).
     """
+    words = _superlatives(words)
     # "the robot should walk over to ...": the place is said after the verb that opens it
     # (a verb after a count or a direction is no opening: "two go below the rock")
     said = (set(DIRECTIONS) | set(NUMBERS) | set(ORDINALS) | set(SUPERLATIVES) | set(names))
@@ -306,6 +307,26 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     landmark = _landmark(words[start:], names)
     offset = (offset[0] + after[0], offset[1] + after[1])
     return None if landmark is None else Place('landmark', landmark, offset)
+
+
+# "most western": a superlative of two words, as "westernmost"
+_MOST = {
+    **dict.fromkeys(('west', 'western', 'left'), 'westernmost'),
+    **dict.fromkeys(('east', 'eastern', 'right'), 'easternmost'),
+    **dict.fromkeys(('north', 'northern', 'top', 'upper'), 'northernmost'),
+    **dict.fromkeys(('south', 'southern', 'bottom', 'lower'), 'southernmost'),
+}
+
+
+def _superlatives(words: list[str]) -> list[str]:
+    """Return the words with each "most <side>" as one superlative ("most western")."""
+    out = []
+    for w in words:
+        if out and out[-1] == 'most' and w in _MOST:
+            out[-1] = _MOST[w]
+        else:
+            out.append(w)
+    return out
 
 
 def _particle(words: list[str], i: int) -> bool:
