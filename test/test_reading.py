@@ -265,6 +265,13 @@ def test_lengths_in_units_people_use(text, cells):
     assert in_cells(digits(text), 0.5) == cells
 
 
+def test_vague_amounts_are_a_side_and_a_couple_is_two(office):
+    grid = office_map(office)  # the sofa at (8, 6)
+    assert office.ground(grid, 'go a bit left of the sofa').goal == (8, 5)
+    assert office.ground(grid, 'go slightly above the sofa').goal == (7, 6)
+    assert office.ground(grid, 'go a couple of cells left of the sofa').goal == (8, 4)
+
+
 def test_number_words_past_three_become_digits_and_small_ones_stay_words():
     assert digits('go six cells below the rock') == 'go 6 cells below the rock'
     assert digits('go twenty one cells left') == 'go 21 cells left'

@@ -75,8 +75,21 @@ def _amount(text: str) -> float:
     return float(_NUMBER_WORDS.get(text) or text.replace(',', '.'))  # 1,5 m is 1.5 m
 
 
+# "a couple of metres" is two; "a bit left of", "slightly above" a step, as "left of" is
+_COUPLE = re.compile(r'\ba (?:couple|pair)(?: of)?\b', re.IGNORECASE)
+_A_BIT = re.compile(
+    r'\b(?:(?:just )?a (?:little )?(?:bit|tad)|a little|slightly|somewhat)\b ?', re.IGNORECASE
+)
+
+
 def digits(text: str) -> str:
-    """Return the text with each cardinal number past three in digits: "6 feet" for "six feet"."""
+    """
+    Return the text with each cardinal number past three in digits: "6 feet" for "six feet".
+
+    "A couple of" is two; "a bit", "a little" and "slightly" say no more than the side after
+    them ("a bit left of the sofa": left of it, one cell).
+    """
+    text = _A_BIT.sub('', _COUPLE.sub('two', text))
 
     def number(match: re.Match) -> str:
         said = match.group(0)
