@@ -193,6 +193,7 @@ def test_train_options_are_the_config_fields():
         paraphrase=TASKS['pw'].paraphrase,
         generator_mode=TASKS['pw'].generator_mode,
         late_from=TASKS['pw'].late_from,
+        select=TASKS['pw'].select,
         **TASKS['pw'].recipes['t-rnet-attn'],  # the default's own fields (late row-col worlds)
     )
     # every field is set but the checkpoint to start from (the run resolved: recipe.py)

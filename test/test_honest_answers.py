@@ -179,6 +179,7 @@ def test_nearness_to_a_solid_landmark_is_answered_and_furthest_from_not_read_as_
         'go away from the fridge',
         'move away from the couch',
         'get far away from the fridge',
+        'take a step back from the fridge',
         'far from the couch',
         'stay clear of the fridge',
         'two cells away from the fridge',

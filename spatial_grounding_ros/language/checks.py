@@ -103,7 +103,7 @@ UNLEARNED = (
 # words that say where not to be, or a distance with no side ("go away from the fridge", "two
 # cells away from it"): with no direction word, no cell to go to (the network would read them
 # as closest to the landmark); with one ("one cell left, away from the fridge"), a place
-AWAY = ('away from', 'far from', 'clear of')
+AWAY = ('away from', 'far from', 'clear of', 'back from')
 # the farthest of cells, not of a kind ("the farthest cell from the lamp"): never learned, and
 # the network reads it as the closest
 FARTHEST_CELL = re.compile(r' (?:farthest|furthest) (?:\w+ ){1,2}from ')

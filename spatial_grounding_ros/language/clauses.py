@@ -82,6 +82,8 @@ ACTIONS = frozenset(
 ) | frozenset(m.split()[0] for m in MOTIONS)
 # what a fetch opens with: "get a soda from the fridge"
 FETCH_VERBS = frozenset('get grab pick fetch take collect bring'.split())
+# ... and what says a way to go, not a thing: "get far away from the fridge"
+AWAY_WORDS = frozenset(DIRECTIONS) | frozenset('away far farther further clear back off'.split())
 # between an action and the place before it
 JOINS = ('and then', 'then', 'and', 'and also', 'after that', 'and after that')
 # what may stand around a landmark in a list of places ("go to the couch and to the fridge")
@@ -198,6 +200,10 @@ def fetched(words: list[str], mentions) -> tuple[list[str], bool]:
     me ..." bring it back: the robot's cell next.
     """
     if not words or words[0] not in FETCH_VERBS or 'from' not in words:
+        return words, False
+    # a thing is fetched: "get far away from the fridge" is no fetch
+    fetched_thing = [w for w in words[1:words.index('from')] if w not in ('me', 'up', 'out')]
+    if not fetched_thing or set(fetched_thing) & AWAY_WORDS:
         return words, False
     rest = words[words.index('from') + 1:]
     found = mentions(rest)
