@@ -201,11 +201,12 @@ def fetched(words: list[str], mentions) -> tuple[list[str], bool]:
     """
     if not words or words[0] not in FETCH_VERBS or 'from' not in words:
         return words, False
+    source = words.index('from')
     # a thing is fetched: "get far away from the fridge" is no fetch
-    fetched_thing = [w for w in words[1:words.index('from')] if w not in ('me', 'up', 'out')]
-    if not fetched_thing or set(fetched_thing) & AWAY_WORDS:
+    thing = [w for w in words[1:source] if w not in ('me', 'up', 'out')]
+    if not thing or set(thing) & AWAY_WORDS:
         return words, False
-    rest = words[words.index('from') + 1:]
+    rest = words[source + 1:]
     found = mentions(rest)
     if not found:
         return words, False

@@ -398,8 +398,8 @@ class Reader:
                 out.append(w)
                 continue
             # before a unit it is a count: "tow cells" (not "top")
-            counts = words[i + 1:i + 2] and words[i + 1] in UNITS
-            meant = spelling(w, COUNT_WORDS) if counts else spelling(w)
+            counted = i + 1 < len(words) and words[i + 1] in UNITS
+            meant = spelling(w, COUNT_WORDS) if counted else spelling(w)
             if meant is not None:
                 spelled.append((w, meant))
             out.append(meant or w)

@@ -121,16 +121,14 @@ def label_landmarks(ax, grid: np.ndarray, table) -> None:
             ax.plot(cells[:, 1], cells[:, 0], 's', color='tab:blue', ms=5, ls='')
             r, c = cells.mean(0)
             low, high = cells[:, 0].max() + 0.3, cells[:, 0].min() - 0.3
+            # under, over, further under, further over; the last one stays if all overlap
             spots = ((low, 'top'), (high, 'bottom'), (low + 0.6, 'top'), (high - 0.6, 'bottom'))
-            for y, va in spots:
+            for k, (y, va) in enumerate(spots):
                 text = ax.text(c, y, said(table, kind), ha='center', va=va, fontsize=7)
                 box = text.get_window_extent(renderer)
-                if not any(box.overlaps(other) for other in placed):
+                if k == len(spots) - 1 or not any(box.overlaps(other) for other in placed):
                     break
                 text.remove()
-            else:
-                box = ax.text(c, low, said(table, kind), ha='center', va='top',
-                              fontsize=7).get_window_extent(renderer)
             placed.append(box)
 
 
