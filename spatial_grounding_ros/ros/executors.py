@@ -7,8 +7,9 @@
 """
 Where a node's callbacks run: the grounder's worker thread and its serving executor.
 
-Short callbacks (inputs, status, lifecycle) run in the spinning thread, topic groundings on a
-Worker that the inputs wake, and requests that may wait (the grounder's service) on a pool.
+Short callbacks (inputs, status, lifecycle, a small map's grounding) run in the spinning thread,
+a large map's topic groundings on a Worker that the inputs wake, and requests that may wait (the
+grounder's service) on a pool.
 """
 
 from __future__ import annotations
@@ -27,31 +28,21 @@ from rclpy.node import Node
 
 
 class Worker:
-    """
-    A thread that runs `work` each time it is woken; a wake while it works runs it again.
-
-    A wake may give way: the waking thread steps aside until the work has answered. In
-    CPython the threads share one interpreter lock, and an executor's own loop after a
-    callback (about a millisecond of Python) held it while the woken work waited: make bench's
-    instruction to goal_pose took 1-2 ms more at p50 on 10x10 maps.
-    """
+    """A thread that runs `work` each time it is woken; a wake while it works runs it again."""
 
     def __init__(self, work: Callable[[], None], name: str):
         self.work, self.wanted, self.closing = work, threading.Event(), False
-        self.answer = threading.Event()  # set by answered(), and when a run of work ends
+        self.working = False
         self.thread = threading.Thread(target=self.run, name=name, daemon=True)
         self.thread.start()
 
-    def wake(self, give_way: float = 0.0) -> None:
-        """Run the work (again); wait until it has answered or ended, at most `give_way` s."""
-        self.answer.clear()
+    def wake(self) -> None:
+        """Run the work (again)."""
         self.wanted.set()
-        if give_way > 0:
-            self.answer.wait(give_way)
 
-    def answered(self) -> None:
-        """Let the thread that gave way go on (the work calls it once its answer is out)."""
-        self.answer.set()
+    def idle(self) -> bool:
+        """Whether the work neither runs nor waits to (a wake made before is under way)."""
+        return not (self.working or self.wanted.is_set())
 
     def stop(self) -> None:
         """End the thread once the work under way has ended."""
@@ -62,13 +53,14 @@ class Worker:
     def run(self) -> None:
         while True:
             self.wanted.wait()
+            self.working = True
             self.wanted.clear()
-            if self.closing:
-                return
             try:
+                if self.closing:
+                    return
                 self.work()
             finally:
-                self.answer.set()
+                self.working = False
 
 
 class ServingExecutor(SingleThreadedExecutor):

@@ -20,10 +20,10 @@ value_map_image, relation_map and a diagnostic naming the intent; the node's sta
 keeps running. The service ground_instruction answers one instruction without publishing, or
 refuses it at once as `busy` when max_pending_requests are in flight.
 
-Threads: the inputs, the status and the lifecycle run in the spinning thread (spin()'s
-ServingExecutor); topic groundings on a thread of their own, which the inputs wake; service
-requests on request threads (max_pending_requests + 1), so a long grounding neither stops the
-status nor the inputs. One grounding runs at a time (the model lock).
+Threads: inputs, status, lifecycle and topic groundings on maps of up to INLINE_CELLS cells run
+in the spinning thread (spin()'s ServingExecutor); larger maps' on a thread the inputs wake;
+service requests on max_pending_requests + 1 threads: a long grounding neither stops the status
+nor the inputs. One grounding runs at a time (the model lock).
 """
 
 from __future__ import annotations
@@ -71,9 +71,10 @@ from ..models.checkpoints import load_checkpoint, resolve_checkpoint
 
 NODE_NAME = 'spatial_grounder'
 STEADY = ClockType.STEADY_TIME  # instruction_timeout is wall time, also under use_sim_time
-# the spinning thread waits this long at most for a woken grounding's goal (Worker.wake): a
-# small map's goal goes out first, a large map's grounding does not hold the inputs up
-GIVE_WAY_S = 0.02
+# maps of at most this many cells ground in the spinning thread (in 17 ms or less with the
+# mirror images, make bench): a hand-over to the grounding thread and back cost a small map's
+# goal about 1 ms at p50; larger ones ground on that thread, so the inputs are taken meanwhile
+INLINE_CELLS = 64 * 64
 
 
 class GrounderNode(LifecycleNode):
@@ -97,8 +98,8 @@ class GrounderNode(LifecycleNode):
         self.grounding = ''  # the instruction a topic grounding works on
         self.hold = InstructionHold()
         self.service_group = ReentrantCallbackGroup()
-        # topic groundings run on a thread of their own, woken by the inputs, so the inputs
-        # are taken meanwhile and the spinning thread waits while the model works
+        # a large map's topic groundings run on a thread of their own (ground_soon), so the
+        # inputs are taken meanwhile
         self.topic_grounding = Worker(self.ground_held, 'topic groundings')
         self.release_input()
         # diagnostics in every state: they say why an instruction was not grounded; deep
@@ -177,15 +178,9 @@ class GrounderNode(LifecycleNode):
             self.value_raw_pub,
             self.value_image_pub,
             self.relation_map_pub,
-            subscription(
-                OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED,
-            ),
-            subscription(
-                String, topics.INSTRUCTION, self.on_instruction, BURST
-            ),
-            subscription(
-                PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10
-            ),
+            subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED),
+            subscription(String, topics.INSTRUCTION, self.on_instruction, BURST),
+            subscription(PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10),
             self.create_service(
                 GroundInstruction,
                 topics.GROUND_INSTRUCTION,
@@ -256,7 +251,7 @@ class GrounderNode(LifecycleNode):
         self.release()  # as a shutdown transition would: model and topics first
         super().destroy_node()
 
-    # --- topics (short: in the spinning thread; groundings run in ground_held)
+    # --- topics (in the spinning thread; groundings run in ground_held, see ground_soon)
 
     @guarded('entity_map')
     def on_entity_map(self, msg: OccupancyGrid) -> None:
@@ -291,7 +286,7 @@ class GrounderNode(LifecycleNode):
             self.report_dropped(self.hold.expire(self.param('instruction_timeout')))
             reground = self.active and self.hold.on_map(self.param('reground_on_map_change'))
         if reground:
-            self.topic_grounding.wake(give_way=GIVE_WAY_S)
+            self.ground_soon()
 
     def check_text(self, text: str) -> None:
         """Raise ValueError naming what is wrong with an instruction (or the node's state)."""
@@ -332,7 +327,7 @@ class GrounderNode(LifecycleNode):
                     clock=Clock(clock_type=STEADY),
                 )
         if held_map:
-            self.topic_grounding.wake(give_way=GIVE_WAY_S)
+            self.ground_soon()
             return
         self.report(
             'instruction',
@@ -397,9 +392,17 @@ class GrounderNode(LifecycleNode):
         header = Header(stamp=stamp, frame_id=frame)
         return Poser(map_msg.info, header, self.param('goal_heading'), self.robot_yaw)
 
+    def ground_soon(self) -> None:
+        """Ground the held instruction: a small map's here, unless the model is busy."""
+        small = self.grid is not None and self.grid.size <= INLINE_CELLS
+        if small and self.topic_grounding.idle() and not self.model_lock.locked():
+            self.ground_held()
+        else:
+            self.topic_grounding.wake()  # it takes the held instruction once it is free
+
     @guarded('grounding')
     def ground_held(self) -> None:
-        """Ground the held instruction on the held map, if it still waits (grounding thread)."""
+        """Ground the held instruction on the held map, if it still waits (see ground_soon)."""
         with self.state_lock:
             text = self.hold.take() if self.active and self.grid is not None else None
             if text is None:
@@ -428,7 +431,6 @@ class GrounderNode(LifecycleNode):
         goal = poser.goal(result) if result.reason is None else None
         if goal is not None:
             self.goal_pub.publish(goal)
-        self.topic_grounding.answered()  # a planner's answer is out: the spinning thread goes on
         if goal is not None or intent(result) == 'stop':
             self.path_pub.publish(poser.path(result))  # a stop's is empty
         if result.values is not None and np.size(result.values):
