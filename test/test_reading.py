@@ -134,12 +134,32 @@ def test_before_and_after_order_the_steps(office, text):
     [
         ('go one above the sofa and one to the left', (7, 5)),
         ('a cell below the fridge and to the right', (4, 4)),
+        ('one below the fridge and one over to the left', (4, 2)),  # "over" is no side here
+        ('end up two cells below the sofa', (10, 6)),  # nor is the verb's "up"
         ('the 2nd cell below the fridge', (5, 3)),
         ('the 3rd square to the left of the desk', (5, 6)),
     ],
 )
 def test_offsets_said_around_the_landmark_and_as_ordinals(office, text, goal):
     assert office.ground(office_map(office), text).goal == goal
+
+
+@pytest.mark.parametrize(
+    'text', ['go one above the sofa and two below', 'two left of the fridge and one to the right']
+)
+def test_steps_to_both_sides_of_one_landmark_decline(office, text):
+    result = office.ground(office_map(office), text)
+    assert result.goal is None and 'opposite sides' in result.reason, (text, result.reason)
+
+
+def test_a_step_said_of_the_landmark_before_it(office):
+    grid = office_map(office)
+    two = office.ground(grid, 'go one above the sofa, then two below it')
+    assert two.intent == 'sequence' and [s.goal for s in two.steps] == [(7, 6), (10, 6)]
+    for text in ('go to the sofa, then two below it', 'go over to the sofa, then end up two '
+                 'below it'):  # where the robot ends up
+        one = office.ground(grid, text)
+        assert one.intent == 'go' and one.goal == (10, 6), text
 
 
 def test_halfway_to_a_landmark_is_from_the_robot(office):

@@ -155,6 +155,26 @@ def offset_before(words: list[str], start: int, end: int) -> tuple[int, int]:
     return dr, dc
 
 
+def opposite_sides(words: list[str], mentions: list[Mention]) -> str | None:
+    """
+    Return why one landmark said with steps on both sides of an axis fits no cell, or None.
+
+    "one above the rock and two below": the steps before the landmark and those after its
+    "and" go opposite ways along one axis. Two landmarks ("above the rock and below the
+    heart") are a place between them, not this.
+    """
+    if len(mentions) != 1 or words[mentions[0].end:mentions[0].end + 1] != ['and']:
+        return None
+    # a side word before "to" is none: "one over to the left"
+    sides = [(DIRECTIONS[w], i) for i, w in enumerate(words) if w in DIRECTIONS
+             and words[i + 1:i + 2] != ['to']]
+    before = [d for d, i in sides if i < mentions[0].start]
+    after = [d for d, i in sides if i > mentions[0].end]
+    if any(a[k] * b[k] < 0 for a in before for b in after for k in (0, 1)):
+        return 'ambiguous: the words put the goal on opposite sides of the landmark'
+    return None
+
+
 def mention_offsets(words: list[str], mentions: list[Mention]) -> list[tuple[Mention, tuple]]:
     """
     Pair each mention with the offset its words say: those back to the previous mention.

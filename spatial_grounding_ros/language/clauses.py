@@ -93,6 +93,8 @@ BARE = GO_VERBS | FILLERS | frozenset(
 # ... and "by" after a verb of visiting ("stop by the lamp and the sofa"; "the circle by the
 # house and the diamond" is one place)
 VISIT_VERBS = GO_VERBS | frozenset('swing drop pop'.split())
+# ... and a go verb's particle before "to" ("go over to the lamp", "head back to the desk")
+PARTICLES = frozenset('over up down out back on'.split())
 # between two landmarks offered as a choice ("the fridge or maybe the couch")
 CHOICE_GAP = frozenset('or the a an to maybe perhaps possibly else'.split())
 
@@ -232,10 +234,12 @@ def without_return(words: list[str], mentions) -> tuple[list[str], bool]:
 
 
 def bare(words: list[str], found: list, also=frozenset()) -> bool:
-    """Say whether every word besides the landmarks `found` only goes ("go to the", "and")."""
+    """Say whether every word besides the landmarks `found` only goes ("go over to the")."""
     named = {k for m in found for k in range(m.start, m.end)}
     return all(
-        w in BARE | also or w == 'by' and k and words[k - 1] in VISIT_VERBS
+        w in BARE | also
+        or w == 'by' and k and words[k - 1] in VISIT_VERBS
+        or w in PARTICLES and words[k + 1:k + 2] == ['to']
         for k, w in enumerate(words)
         if k not in named
     )

@@ -113,7 +113,9 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
     """
     dr = dc = 0
     count, i, seen = None, 0, False
-    kept = [w for w in words if w not in OFFSET_GLUE]
+    # "one over to the left": "over" before "to" is no side
+    kept = [w for i, w in enumerate(words)
+            if w not in OFFSET_GLUE and not (w == 'over' and words[i + 1:i + 2] == ['to'])]
     while i < len(kept):
         w = kept[i]
         if w in INTENSIFIERS and kept[i + 1:i + 2] and DIRECTIONS.get(kept[i + 1], (0, 0))[0]:

@@ -44,6 +44,7 @@ from .checks import (
     MAP_WORDS,
     moves,
     NUMBERS,
+    opposite_sides,
     PHRASE_ENDS,
     QUALIFIERS,
     relation_reason,
@@ -425,7 +426,7 @@ class Reader:
 
     def reason_of(self, words, mentions, unknown, place=None) -> str | None:
         """Return why the words alone leave no cell to go to, or None."""
-        why = relation_reason(words, place is not None)
+        why = relation_reason(words, place is not None) or opposite_sides(words, mentions)
         if mentions and why:
             return why
         first = mentions[0].start if mentions else len(words)

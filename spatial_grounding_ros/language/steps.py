@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from typing import Callable
 
+from .checks import DIRECTIONS
 from .clauses import bare, listed
 from .phrases import find_phrase
 from .vocabulary import GO_VERBS, SEQUENCE_MARKS
@@ -95,10 +96,12 @@ def checked(cuts: list[list[str]], words: list[str], mentions) -> list[list[str]
 
 def said_of_it(cuts: list[list[str]], mentions) -> list[list[str]] | None:
     """
-    Return the one place of "go to the fridge, then stop two right of it", or None.
+    Return the steps of "go to the fridge, then stop two right of it", or None.
 
-    The second step is said of the landmark the first goes to and names none of its own:
-    "it" is that landmark, and the place said of it is where the robot ends up.
+    The second step is said of the landmark the first names and names none of its own: "it"
+    is that landmark. After the landmark itself ("go to the fridge") the place said of it is
+    where the robot ends up, one step; after a place beside it ("go above the rock, then
+    below it"), two steps.
     """
     if len(cuts) != 2:
         return None
@@ -106,10 +109,12 @@ def said_of_it(cuts: list[list[str]], mentions) -> list[list[str]] | None:
     named = mentions(first)
     if len(named) != 1 or mentions(then) or 'it' not in then or 'its' in then:
         return None
-    if not bare(first, named):  # "go to the fridge", not a place said of it
-        return None
     landmark = ['the', *named[0].words]
-    return [[x for w in then for x in (landmark if w == 'it' else [w])]]
+    then = [x for w in then for x in (landmark if w == 'it' else [w])]
+    if bare(first, named):
+        return [then]
+    sides = [w for k, w in enumerate(first) if w in DIRECTIONS and first[k + 1:k + 2] != ['to']]
+    return [first, then] if sides else None
 
 
 def trimmed(cut: list[str]) -> list[str]:

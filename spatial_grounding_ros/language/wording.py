@@ -69,7 +69,8 @@ PHRASES = {
         'navigate', 'head', 'find', 'stop', 'park', 'wait', 'go over to', 'head over to',
         'come to', 'take me to', 'walk to', 'walk over to', 'roll to', 'meet me at',
         'meet me by', 'meet me near', 'meet at', 'wait at', 'wait by', 'stop by', 'head for',
-        'make your way to', 'drive over to', 'move over to',
+        'make your way to', 'drive over to', 'move over to', 'end up at', 'end up on',
+        'end up by', 'end up', 'wind up at', 'wind up',
     ],
     'cell': ['square', 'spot', 'tile', 'space', 'position', 'place', 'location', 'area'],
     # an ordinal cell is a count: "the second square below the sink"
