@@ -91,6 +91,10 @@ def test_bench_writes_every_section(tmp_path):
     mirrored = result['ros_end_to_end_mirrored']
     assert mirrored['requests'] == 5 and 0 < mirrored['p50_ms'] <= mirrored['p99_ms']
     assert ros['load_average_at_start'] >= 0 and mirrored['load_average_at_start'] >= 0
+    echo = result['ros_echo']  # the echo node answered each instruction
+    assert echo['requests'] == 5 and 0 < echo['p50_ms'] <= echo['p99_ms']
+    assert 'the echo node in its own process' in echo['measured']
+    assert 'an echo node in place of the grounder' in bench.table(result)
     memory = result['memory']
     assert memory['rss_mb_after_110'] > 0 and 'Grounder.ground()' in memory['measured']
     assert set(result['checks']) == set(bench.TARGETS)

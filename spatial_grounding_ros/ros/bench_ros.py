@@ -9,6 +9,8 @@ End-to-end ROS latency for `spatial-grounding bench`.
 
 The grounder node runs as its own process (as deployed); a client node in this process holds one
 entity map on the topic and times each instruction from publish() to the goal_pose callback.
+`python -m spatial_grounding_ros.ros.bench_ros` is the echo node that stands in for the grounder
+to time rclpy and DDS alone: a goal_pose for each instruction, nothing done in between.
 """
 
 from __future__ import annotations
@@ -16,13 +18,14 @@ from __future__ import annotations
 import os
 import random
 import subprocess
+import sys
 import time
 
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 import numpy as np
 import rclpy
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Header, String
 
@@ -35,6 +38,30 @@ from ..studies.measure import percentiles, rss_mb
 # a namespace of this process's own (like the demo's): two benches, or a bench and a test
 # run, that share a ROS_DOMAIN_ID never answer each other's requests
 NAMESPACE = f'/bench_{os.getpid()}'
+
+
+class EchoNode(Node):
+    """Answer each instruction with an empty goal_pose: the round trip without a grounding."""
+
+    def __init__(self):
+        super().__init__('bench_echo')
+        self.goal_pub = self.create_publisher(PoseStamped, topics.GOAL_POSE, 10)
+        self.create_subscription(String, topics.INSTRUCTION, self.on_instruction, 10)
+
+    def on_instruction(self, msg: String) -> None:
+        self.goal_pub.publish(PoseStamped())
+
+
+def echo_main() -> None:
+    rclpy.init(args=sys.argv)
+    node = EchoNode()
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
 
 
 class LatencyClient(Node):
@@ -90,33 +117,37 @@ def round_trip_latency(
     warmup: int = 20,
     progress=None,
     parameters: tuple = (),
+    echo: bool = False,
 ) -> dict:
     """
     Measure p50/p99 instruction -> goal_pose latency and the grounder's RSS.
 
     p50/p99 of instruction -> goal_pose over `requests` requests on one held map, and the
     grounder process's RSS after the warm-up and at the end. `parameters`: more of the node's
-    parameters, as `name:=value`.
+    parameters, as `name:=value`. `echo`: the echo node in place of the grounder.
     """
     # loopback only, and a domain of its own unless the caller chose one (both processes)
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(1, 100)))
+    node_command = [
+        *executable('grounder'),
+        '--ros-args',
+        '-r',
+        f'__ns:={NAMESPACE}',
+        '-p',
+        f'checkpoint:={checkpoint}',
+        '-p',
+        'entity_table:=entities_puddleworld.yaml',  # PuddleWorld maps (the default: office)
+        '-p',
+        # every instruction is timed to its goal_pose: none may be declined as unsure (an
+        # uncalibrated checkpoint's confidence means little)
+        'min_confidence:=0.0',
+        *(a for p in parameters for a in ('-p', p)),
+    ]
+    if echo:
+        node_command = [sys.executable, '-m', __name__, '--ros-args', '-r', f'__ns:={NAMESPACE}']
     node_process = subprocess.Popen(
-        [
-            *executable('grounder'),
-            '--ros-args',
-            '-r',
-            f'__ns:={NAMESPACE}',
-            '-p',
-            f'checkpoint:={checkpoint}',
-            '-p',
-            'entity_table:=entities_puddleworld.yaml',  # PuddleWorld maps (the default: office)
-            '-p',
-            # every instruction is timed to its goal_pose: none may be declined as unsure (an
-            # uncalibrated checkpoint's confidence means little)
-            'min_confidence:=0.0',
-            *(a for p in parameters for a in ('-p', p)),
-        ],
+        node_command,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
@@ -153,7 +184,12 @@ def round_trip_latency(
         'node_rss_mb_after_warmup': rss_after_warmup,
         'node_rss_mb_end': rss_end,
         'measured': 'instruction published by a client node in the bench process -> '
-        'goal_pose received by it; the grounder node in its own process '
-        f'(console script), one held map, {len(instructions)} instructions in turn, '
+        'goal_pose received by it; '
+        + ('the echo node' if echo else 'the grounder node (console script)')
+        + f' in its own process, one held map, {len(instructions)} instructions in turn, '
         f'{warmup} warm-up requests first',
     }
+
+
+if __name__ == '__main__':
+    echo_main()

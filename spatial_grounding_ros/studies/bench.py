@@ -282,22 +282,18 @@ def run(args, ros_latency: Callable[..., dict] | None = None) -> dict:
         # more instructions in turn than a Grounder keeps: each request is new to the node
         if len(texts) <= CACHED_INSTRUCTIONS:
             raise RuntimeError(f'{len(texts)} instructions: each would not be new to the node')
-        # the node as shipped (new instructions, then a few it has grounded before), then with
-        # the mirror images on every map, in one run
-        for key, parameters, said in (
-            ('ros_end_to_end', (), texts),
-            ('ros_end_to_end_repeated', (), texts[:REPEATED]),
-            ('ros_end_to_end_mirrored', ('mirror_average_below:=1.0',), texts),
+        # rclpy and DDS alone (an echo node), the node as shipped (new instructions, then a few
+        # it has grounded before), then with the mirror images on every map, in one run
+        for key, options, said in (
+            ('ros_echo', {'echo': True}, texts),
+            ('ros_end_to_end', {}, texts),
+            ('ros_end_to_end_repeated', {}, texts[:REPEATED]),
+            ('ros_end_to_end_mirrored', {'parameters': ('mirror_average_below:=1.0',)}, texts),
         ):
             load = os.getloadavg()[0]
             with tqdm(total=args.ros_requests, desc=key.replace('_', ' ')) as progress:
                 result[key] = ros_latency(
-                    args.checkpoint,
-                    grid,
-                    said,
-                    args.ros_requests,
-                    progress=progress,
-                    parameters=parameters,
+                    args.checkpoint, grid, said, args.ros_requests, progress=progress, **options
                 )
             result[key]['load_average_at_start'] = load
     result['memory'] = memory_growth(grounder, 100, args.memory_requests)
@@ -434,6 +430,7 @@ def ros_lines(result: dict, checks_: dict) -> list[str]:
     for key, what in (
         ('ros_end_to_end_repeated', f'{REPEATED} instructions in turn, each grounded before'),
         ('ros_end_to_end_mirrored', 'mirror_average_below 1 (every map with its mirror images)'),
+        ('ros_echo', 'an echo node in place of the grounder (rclpy and DDS alone, no grounding)'),
     ):
         if result.get(key):
             other = result[key]
