@@ -152,6 +152,12 @@ def test_steps_to_both_sides_of_one_landmark_decline(office, text):
     assert result.goal is None and 'opposite sides' in result.reason, (text, result.reason)
 
 
+@pytest.mark.parametrize('text', ['go to the leftmost object', 'one below the second object'])
+def test_a_pick_of_no_kind_declines(office, text):
+    result = office.ground(office_map(office), text)  # it sent the network's guess at 0.12
+    assert result.goal is None and 'names no kind' in result.reason, (text, result.reason)
+
+
 def test_a_step_said_of_the_landmark_before_it(office):
     grid = office_map(office)
     two = office.ground(grid, 'go one above the sofa, then two below it')

@@ -155,6 +155,17 @@ def offset_before(words: list[str], start: int, end: int) -> tuple[int, int]:
     return dr, dc
 
 
+# nouns that name no kind: "the leftmost object" could be any landmark's
+GENERIC_NOUNS = frozenset('object objects thing things item items landmark landmarks'.split())
+
+
+def kindless_pick(words: list[str]) -> str | None:
+    """Return why "the leftmost object" (an extreme of no kind) names no landmark, or None."""
+    picked = next((w for k, w in enumerate(words)
+                   if w in GENERIC_NOUNS and k and words[k - 1] in QUALIFIERS), None)
+    return picked and f'ambiguous: "{picked}" names no kind of landmark to pick one of'
+
+
 def opposite_sides(words: list[str], mentions: list[Mention]) -> str | None:
     """
     Return why one landmark said with steps on both sides of an axis fits no cell, or None.

@@ -41,6 +41,7 @@ from .checks import (
     BEFORE_A_NAME,
     CLAUSES,
     DIRECTIONS,
+    kindless_pick,
     MAP_WORDS,
     moves,
     NUMBERS,
@@ -429,6 +430,9 @@ class Reader:
         why = relation_reason(words, place is not None) or opposite_sides(words, mentions)
         if mentions and why:
             return why
+        picked = kindless_pick(words)  # "the leftmost object"
+        if picked:
+            return picked
         first = mentions[0].start if mentions else len(words)
         for i, w in unknown:
             nxt = words[i + 1] if i + 1 < len(words) else None
