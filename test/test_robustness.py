@@ -27,7 +27,7 @@ from spatial_grounding_ros.models.checkpoints import load_checkpoint, save_check
 from spatial_grounding_ros.models.config import ModelConfig
 from spatial_grounding_ros.models.registry import build_model
 from spatial_grounding_ros.studies.explain import pair_scores
-from spatial_grounding_ros.studies.robustness import markdown_table, minimum_verdict
+from spatial_grounding_ros.studies.robustness import kept_rows, markdown_table, minimum_verdict
 import torch
 
 N_WORLDS = 8
@@ -122,6 +122,22 @@ def test_minimum_verdict_reads_the_rows():
     averaged = minimum_verdict(rows(0.2, 0.1), seeds)
     assert 'per-task checkpoints: holds' in averaged and 'seeds 0, 1, 2, 3' in averaged
     assert 't-rnet-attn +10%, t-cnn +20%' in averaged
+
+
+def test_a_run_of_some_tasks_keeps_the_other_tasks_rows(tmp_path):
+    def study(ks, *tasks, md=1.0):
+        rows = [{'task': t, 'model': 't-cnn', 'md': md} for t in tasks]
+        return {'seed': 0, 'ks': ks, 'missing': [], 'results': rows, 'minimum_seeds': rows}
+
+    path = tmp_path / 'robustness.json'
+    path.write_text(json.dumps(study([0, 10], 'pw-local', 'pw-global', 'isi')))
+    merged = kept_rows(path, study([0, 10], 'isi', md=2.0), ['isi'])
+    for key in ('results', 'minimum_seeds'):
+        assert [(r['task'], r['md']) for r in merged[key]] == [
+            ('pw-local', 1.0), ('pw-global', 1.0), ('isi', 2.0)]
+    # another study (its ks differ): nothing of the earlier file is kept
+    assert kept_rows(path, study([0, 5], 'isi'), ['isi'])['results'] == study([0, 5], 'isi')[
+        'results']
 
 
 def test_markdown_table_has_a_line_per_model_and_noise(setup):

@@ -236,7 +236,9 @@ def reproduce_robustness(
     family, trained on both PW tasks).
 
     Writes robustness.json, robustness.md and robustness.png to `out`. A model without a
-    shipped checkpoint for a task is listed under "missing", not silently left out.
+    shipped checkpoint for a task is listed under "missing", not silently left out. The rows of
+    tasks not run are kept from an earlier robustness.json of the same seed and ks (as
+    reproduce keeps the value-map rows it does not train).
     """
     out = Path(out)
     rows, missing, found_by_task = [], [], {}
@@ -260,10 +262,26 @@ def reproduce_robustness(
         'minimum_seeds': seed_rows,
     }
     out.mkdir(parents=True, exist_ok=True)
+    result = kept_rows(out / 'robustness.json', result, tasks)
     (out / 'robustness.json').write_text(json.dumps(result, indent=1) + '\n')
     (out / 'robustness.md').write_text(robustness_markdown(result))
-    plot_robustness(rows, out / 'robustness.png')
+    plot_robustness(result['results'], out / 'robustness.png')
     return result
+
+
+def kept_rows(path: Path, result: dict, tasks) -> dict:
+    """Return `result` with the rows of other tasks than `tasks` of the study at `path`."""
+    earlier = json.loads(path.read_text()) if path.is_file() else {}
+    if (earlier.get('seed'), earlier.get('ks')) != (result['seed'], result['ks']):
+        return result
+    order = {t: i for i, t in enumerate(STUDY_TASKS)}
+
+    def merged(key: str) -> list[dict]:
+        kept = [r for r in earlier.get(key) or [] if r['task'] not in tasks]
+        # stable: each task's rows stay in the order its run wrote them
+        return sorted(kept + result[key], key=lambda r: order.get(r['task'], len(order)))
+
+    return {**result, 'results': merged('results'), 'minimum_seeds': merged('minimum_seeds')}
 
 
 def robustness_markdown(result: dict) -> str:
