@@ -255,25 +255,25 @@ class Grounder:
         the one it reaches first (language/approach.py).
         """
         self.check(grid, instruction)
-        command = self.read(instruction, cell_size)
+        size = self.cell_size if cell_size is None else cell_size
+        command = self.read(instruction, size)
         grid = np.asarray(grid, dtype=np.int64)
         if command.intent in ('go', 'sequence'):
-            steps = [
-                self.ground_reference(grid, instruction, ref, robot_cell) for ref in command.steps
-            ]
+            steps = [self.ground_reference(grid, instruction, ref, robot_cell, size)
+                     for ref in command.steps]
             return self.in_order(instruction, command, steps)
         if command.intent == 'question':
             return self.answered(grid, instruction, command)
         return self.no_goal(grid, instruction, command, command.reason)
 
     def ground_reference(
-        self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
+        self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None, cell_size=None
     ) -> Grounding:
         """Return the grounding of one place: the network's value map, judged and checked."""
         if ref.place is not None and (
             composed(ref.place) or plain_row_col(ref.place, self.entities, grid, ref.mentions)
         ):
-            return self.ground_composed(grid, instruction, ref, robot_cell)
+            return self.ground_composed(grid, instruction, ref, robot_cell, cell_size)
         model_grid, names, mentions = self.model_view(grid, ref)
         words, extra = self.network_words(ref, names, ref.place)
         values, aux = self.network(model_grid, words)
@@ -358,7 +358,7 @@ class Grounder:
         return values[0], aux
 
     def ground_composed(
-        self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None
+        self, grid: np.ndarray, instruction: str, ref: Reference, robot_cell=None, cell_size=None
     ) -> Grounding:
         """Return the grounding of a place composed from the network's groundings of its parts."""
         model_grid, names, _ = self.model_view(grid, ref)
@@ -368,9 +368,8 @@ class Grounder:
             return (*self.network(model_grid, words), words, rest)
 
         kinds = {self.entities.names[m.kind]: m.kind for m in ref.mentions}
-        c = compose.compose(
-            ref.place, self.entities, grid, kinds, ref.reason, network, self.judge, robot_cell
-        )
+        c = compose.compose(ref.place, self.entities, grid, kinds, ref.reason, network,
+                            self.judge, robot_cell, cell_size)
         if c.values is not None:  # a shift of the network's value map
             best, confidence, alternatives = self.judge(c.values)
             referent = nearest_cell(grid, [m.kind for m in ref.mentions], best)

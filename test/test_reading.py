@@ -175,6 +175,17 @@ def test_halfway_to_a_landmark_is_from_the_robot(office):
     assert unknown.goal is None and unknown.reason.startswith('ambiguous: said of the robot')
 
 
+@pytest.mark.parametrize('cell_size, goal', [(1.0, None), (0.5, (6, 3)), (0.05, (6, 3))])
+def test_an_even_gap_is_half_a_cell_off_on_a_fine_map(office, cell_size, goal):
+    """Robot (8, 3), fridge (3, 3): the middle cell nearer the robot where the map is fine."""
+    result = office.ground(
+        office_map(office), 'go halfway to the fridge', cell_size=cell_size, robot_cell=(8, 3)
+    )
+    assert result.goal == goal, result.reason
+    if goal is None:
+        assert 'an even gap' in result.reason
+
+
 def test_which_of_a_kind_said_after_it_or_left_to_the_robot(office):
     grid = office_map(office)  # chairs at (2, 8) and (9, 2)
     for text in ('go to the chair on the right', 'go to the chair, the one at the top'):

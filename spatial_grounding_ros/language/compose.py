@@ -30,6 +30,9 @@ Cell = tuple[int, int]
 # the offset to shift the map by); and the grounder's judge: (best cell, confidence, others)
 Network = Callable[[Place], tuple]
 Judge = Callable[[np.ndarray], tuple]
+# a midpoint half a cell off is taken on maps whose half cell is at most this (metres): Nav2's
+# default goal tolerance (xy_goal_tolerance), so the robot cannot tell the two middle cells apart
+EVEN_GAP_TOLERANCE_M = 0.25
 
 
 @dataclass
@@ -53,6 +56,7 @@ class Composed:
 def compose(
     place: Place, table: EntityTable, grid: np.ndarray, kinds: dict[str, int],
     reason: str | None, network: Network, judge: Judge, robot_cell: Cell | None = None,
+    cell_size: float | None = None,
 ) -> Composed:
     """
     Return a composed place's cells from the network's groundings of its landmarks.
@@ -61,7 +65,8 @@ def compose(
     (places.learned_part); between is the midpoint of its two landmarks; an ordinal or a
     farthest picks among the map's landmarks of the kind; a corner or a side is the map's.
     `kinds`: each landmark name's kind; `reason`: why the reading already declines, or None;
-    `robot_cell`: the robot's (row, col), if known (the anchor of "the nearest chair").
+    `robot_cell`: the robot's (row, col), if known (the anchor of "the nearest chair");
+    `cell_size`: metres per cell, if known (a midpoint's tolerance).
     """
     for name, kind in kinds.items():
         if reason is None and kind not in table.obstacles and not (grid == kind).any():
@@ -85,7 +90,7 @@ def compose(
             on = None if place.on is None else kinds.get(place.on)
             a, b, reason = closest_pair(a, b, grid, on, (place.landmark.name, place.other.name))
         if reason is None:
-            cell, reason = midpoint(a, b, (place.landmark.name, place.other.name))
+            cell, reason = midpoint(a, b, (place.landmark.name, place.other.name), cell_size)
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
     if place.relation == 'row-col':  # past the learned counts: one's row, the other's column
         (a, pa, wa, ra), (b, pb, wb, rb) = locate(place.landmark), locate(place.other)
@@ -344,12 +349,14 @@ def _middle_holds(x, y, grid, kind, names) -> bool:
     return cell is not None and int(grid[cell]) == kind
 
 
-def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str]):
+def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str], cell_size=None):
     """
     Return (the cell halfway between two landmarks, None) or (None, why not).
 
     On each axis, halfway between their facing edges (of one-cell landmarks, their cells); where
-    their extents overlap, the middle of the overlap. An even gap has no middle cell.
+    their extents overlap, the middle of the overlap. An even gap has no middle cell: on a map
+    whose half cell is within EVEN_GAP_TOLERANCE_M (`cell_size`, metres per cell) the middle
+    cell nearer `a` is taken; on others (PuddleWorld's, without a size) it declines.
     """
     mid = []
     for axis in (0, 1):
@@ -363,6 +370,9 @@ def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str]):
         else:  # side by side on this axis: the middle of the rows (columns) both span
             mid.append((max(lo_a, lo_b) + min(hi_a, hi_b)) / 2)
     mid = np.asarray(mid)
+    if cell_size is not None and cell_size / 2 <= EVEN_GAP_TOLERANCE_M:
+        towards_a = centre(a) < mid  # a half cell: round towards a
+        mid = np.where(np.isclose(mid % 1, 0.5), np.where(towards_a, mid - 0.5, mid + 0.5), mid)
     if not np.allclose(mid, np.round(mid)):
         return None, (
             f'ambiguous: halfway between the {names[0]} and the {names[1]} falls between cells '
