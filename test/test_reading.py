@@ -279,6 +279,8 @@ def test_a_word_not_understood_where_it_changes_the_goal_declines(office):
     assert 'xqzv' in result.reason
     assert office.ground(grid, 'go to the fr dge').reason_code == 'unreadable'
     assert office.ground(grid, 'go xqz cells left of the sofa').reason == 'unreadable: "xqz"'
+    # before one unit an unknown word is no count (one cell's is a word known): noise
+    assert office.ground(grid, 'go eventually tile left of the sofa').goal == (8, 5)
     # filler and politeness never matter
     assert office.ground(grid, 'um okay robot kindly go two cells below the sofa thanks').goal == (
         10, 6

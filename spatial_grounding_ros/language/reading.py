@@ -104,6 +104,7 @@ PATH_ENDS = (
 
 
 DIRECTION_ENDS = frozenset('of from the a an to'.split())  # after a direction: "two left of"
+PLURAL_UNITS = frozenset(u for u in UNITS if u.endswith('s'))  # "two cells", not "a cell"
 
 
 def is_slot(word: str) -> bool:
@@ -399,8 +400,9 @@ class Reader:
             if w in self.known or w.isdigit() or any(m.start <= i < m.end for m in mentions):
                 out.append(w)
                 continue
-            # before a unit it is a count: "tow cells" (not "top")
-            counted = i + 1 < len(words) and words[i + 1] in UNITS
+            # before units it is a count: "tow cells" (not "top"); before one unit ("um tile")
+            # it is none, as one cell's count is a word known ("a", "one")
+            counted = words[i + 1:i + 2] in ([u] for u in PLURAL_UNITS)
             meant = spelling(w, COUNT_WORDS) if counted else spelling(w)
             if meant is not None:
                 spelled.append((w, meant))
@@ -452,7 +454,7 @@ class Reader:
             )
             if counted and (nxt in DIRECTION_ENDS or any(m.start == i + 1 for m in mentions)):
                 return f'unreadable: "{w}"'
-            if nxt in UNITS and i < first:  # where the count goes: "go xqz cells left of"
+            if nxt in PLURAL_UNITS and i < first:  # a count's place: "go xqz cells left of"
                 return f'unreadable: "{w}"'
         if not mentions:
             for i, w in enumerate(words):
