@@ -21,8 +21,8 @@ from rapidfuzz.distance import OSA
 
 from .checks import DIRECTIONS, EXTREME_SIDES, NUMBERS
 from .lexicon import RELATION_WORDS
+from .places import UNIT_WORDS
 from .vocabulary import GO_VERBS, LENGTH_UNITS
-from .wording import UNITS
 
 # the words a misspelt word may be read as (one edit; two for words of seven letters or more):
 # the words that move the goal. Verbs and fillers are not among them: a misspelt verb moves
@@ -30,7 +30,7 @@ from .wording import UNITS
 SPELLING_TARGETS = tuple(
     sorted(
         set(DIRECTIONS) | set(EXTREME_SIDES) | {w for w in NUMBERS if w.isalpha()}
-        | set(UNITS) | set(LENGTH_UNITS) | RELATION_WORDS
+        | set(UNIT_WORDS) | set(LENGTH_UNITS) | RELATION_WORDS
         | set('closest nearest farthest furthest between next beside cell square'.split())
     )
 )

@@ -57,7 +57,7 @@ from .clauses import (
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
 from .phrases import COUNT_WORDS, find_phrase, phrase_at, sentences, spelling, texted
-from .places import Place, PLACE_WORDS
+from .places import Place, PLACE_WORDS, UNIT_WORDS
 from .steps import steps as split_steps
 from .units import digits, in_cells, LEARNED_COUNT, offsets
 from .vocabulary import (
@@ -86,7 +86,6 @@ from .wording import (
     OPENING_VERBS,
     side_of_it,
     tidy,
-    UNITS,
     unpossessed,
     wording_words,
 )
@@ -104,7 +103,7 @@ PATH_ENDS = (
 
 
 DIRECTION_ENDS = frozenset('of from the a an to'.split())  # after a direction: "two left of"
-PLURAL_UNITS = frozenset(u for u in UNITS if u.endswith('s'))  # "two cells", not "a cell"
+PLURAL_UNITS = frozenset(u for u in UNIT_WORDS if u.endswith('s'))  # "two cells", not "a cell"
 
 
 def is_slot(word: str) -> bool:
@@ -235,7 +234,7 @@ class Reader:
                 continue  # "no, ..." opening a request, or a trailing "no"
             counted = any(w in NUMBERS for w in words[:i])
             if self.lexicon.mentions(after) or set(after) & {'it', 'its'} or (
-                counted and after and all(w in NUMBERS or w in UNITS for w in after)
+                counted and after and all(w in NUMBERS or w in UNIT_WORDS for w in after)
             ):
                 found.append((i, p))
         if not found:
@@ -243,7 +242,7 @@ class Reader:
         i, p = found[-1]
         before, after = words[:i], words[i + len(p.split()):]
         counts = [k for k, w in enumerate(before) if w in NUMBERS]
-        if counts and after and all(w in NUMBERS or w in UNITS for w in after):
+        if counts and after and all(w in NUMBERS or w in UNIT_WORDS for w in after):
             # "three cells below the fridge, sorry, two": the count said again
             return [*before[:counts[-1]], after[0], *before[counts[-1] + 1:]]
         if counts and after and after[0] in DIRECTIONS:
@@ -450,7 +449,7 @@ class Reader:
             # a word not understood where a direction goes: after a count (and its unit),
             # before the landmark ("two cells xqzv of the sofa", "one undr the sofa")
             counted = prev in NUMBERS or (
-                prev in UNITS and i > 1 and words[i - 2] in NUMBERS
+                prev in UNIT_WORDS and i > 1 and words[i - 2] in NUMBERS
             )
             if counted and (nxt in DIRECTION_ENDS or any(m.start == i + 1 for m in mentions)):
                 return f'unreadable: "{w}"'

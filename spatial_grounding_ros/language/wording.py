@@ -24,6 +24,7 @@ import re
 from typing import Iterable
 
 from .checks import DIRECTIONS, NUMBERS, offset_before
+from .places import UNIT_WORDS
 from .units import METRIC_UNIT
 from ..core.text import tokenize
 
@@ -94,9 +95,6 @@ PHRASES = {
     ],
 }  # fmt: skip
 # words after a count that only say its unit: "two cells below" is "two below"
-UNITS = frozenset(
-    'cell cells square squares step steps space spaces tile tiles spot spots'.split()
-)
 COUNTS = frozenset('one two three four'.split())
 ARTICLES = frozenset('the a an'.split())
 # ... and the words that go on to say which cell (a count, a side, a relation), or none
@@ -151,7 +149,7 @@ def _canonical(words: list[str], keep: set[int]) -> tuple[list[str], list[int | 
     source: list[int | None] = []
     i = 0
     while i < len(words):
-        if words[i] in UNITS and out and out[-1] in COUNTS and i not in keep:
+        if words[i] in UNIT_WORDS and out and out[-1] in COUNTS and i not in keep:
             i += 1
             continue
         for wording, canon in REWRITES.get(words[i], ()):
@@ -178,7 +176,7 @@ def _canonical(words: list[str], keep: set[int]) -> tuple[list[str], list[int | 
 
 def wording_words() -> frozenset[str]:
     """Return every word of the wordings this module reads: none of them names a landmark."""
-    return frozenset(w for ws in PHRASES.values() for p in ws for w in tokenize(p)) | UNITS
+    return frozenset(w for ws in PHRASES.values() for p in ws for w in tokenize(p)) | UNIT_WORDS
 
 
 # "the fridge's left (side)" -> "the left of the fridge": a side said as the landmark's own
@@ -194,7 +192,7 @@ def unpossessed(text: str) -> str:
 
 
 # "north of the bin by two cells" (or ", two cells") -> "two cells north of the bin": the count
-# where it is read; its unit a cell's (UNITS) or a length's (units.METRIC_UNIT)
+# where it is read; its unit a cell's (UNIT_WORDS) or a length's (units.METRIC_UNIT)
 _NUMBER_WORDS = '|'.join(w for w in NUMBERS if w.isalpha())
 # a side: one word ("left", "northeast") or two ("up-left", "bottom and to the right")
 _SIDE = (
@@ -205,7 +203,7 @@ _DIRECTION = (
     r'(?:(?:directly|right|just|diagonally|straight) )?(?:above|below|under|over|beneath|'
     rf'underneath|(?:to the )?{_SIDE} (?:of|from))'
 )
-_UNIT = rf"(?: (?:{'|'.join(sorted(UNITS, key=len, reverse=True))}|{METRIC_UNIT}))"
+_UNIT = rf"(?: (?:{'|'.join(sorted(UNIT_WORDS, key=len, reverse=True))}|{METRIC_UNIT}))"
 _COUNT_AFTER = re.compile(
     rf"\b({_DIRECTION})((?: [a-z0-9'_-]+)+?)(?: by|,) ([0-9]+(?:\.[0-9]+)?|{_NUMBER_WORDS})"
     # not the count of a second description: "two right of the heart, one left of the horse"
