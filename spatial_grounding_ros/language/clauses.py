@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from .checks import DIRECTIONS, NUMBERS
 from .phrases import find_phrase
-from .vocabulary import FILLERS, GO_VERBS, MOTIONS
+from .vocabulary import FILLERS, GO_VERBS, MOTIONS, PARTICLES
 
 # conditions on a request, which the robot has no sensor to check
 CONDITIONS = (
@@ -93,8 +93,6 @@ BARE = GO_VERBS | FILLERS | frozenset(
 # ... and "by" after a verb of visiting ("stop by the lamp and the sofa"; "the circle by the
 # house and the diamond" is one place)
 VISIT_VERBS = GO_VERBS | frozenset('swing drop pop'.split())
-# ... and a go verb's particle before "to" ("go over to the lamp", "head back to the desk")
-PARTICLES = frozenset('over up down out back on'.split())
 # between two landmarks offered as a choice ("the fridge or maybe the couch")
 CHOICE_GAP = frozenset('or the a an to maybe perhaps possibly else'.split())
 
@@ -239,7 +237,7 @@ def bare(words: list[str], found: list, also=frozenset()) -> bool:
     return all(
         w in BARE | also
         or w == 'by' and k and words[k - 1] in VISIT_VERBS
-        or w in PARTICLES and words[k + 1:k + 2] == ['to']
+        or w in PARTICLES and words[k + 1:k + 2] == ['to']  # "go over to the"
         for k, w in enumerate(words)
         if k not in named
     )

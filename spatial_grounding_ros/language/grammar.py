@@ -50,13 +50,13 @@ from .places import (
     SUPERLATIVES,
     UNIT_WORDS,
 )
-from .vocabulary import GO_VERBS
+from .vocabulary import GO_VERBS, PARTICLES
 from ..core.footprints import side_of
 
 INTENSIFIERS = frozenset('right just directly straight'.split())
 _COMPASS = frozenset('north south east west'.split())
 OFFSET_GLUE = frozenset('the to and diagonally on of from away'.split())
-_VERB_TO = [[w, 'to'] for w in ('over', 'up', 'down', 'out', 'back', 'on')]
+_VERB_TO = [[w, 'to'] for w in PARTICLES]
 # what the place is called before a between: "the point halfway between"
 PLACE_NOUNS = frozenset('the a cell square spot point place location position'.split())
 _OPENING = frozenset('reach go to the a cell find get move head navigate drive please'.split())

@@ -86,6 +86,8 @@ MOTIONS = (
     'fetch', 'clean', 'open', 'close', 'push', 'pull', 'lift', 'carry', 'sing', 'play', 'charge',
     'dock', 'look at',
 )
+# a go verb's particle before "to": "go over to the lamp", "head back to the desk"
+PARTICLES = frozenset('over up down out back on'.split())
 # words that point at a place or thing said before or shown, never named ("go there")
 DEICTIC = frozenset('there here it that this them me us you'.split())
 # "across the street", "down the hall": a path or a place passed, not the place to go
