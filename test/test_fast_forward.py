@@ -312,3 +312,43 @@ def test_large_maps_gather_offset_by_offset_as_training_gathers_them_all(shape):
     assert torch.equal(aux['relation_map'], trained_aux['relation_map'].detach())
     assert torch.equal(aux['attention'], trained_aux['attention'].detach())
     torch.testing.assert_close(values, trained.detach(), **TOLERANCE)
+
+
+@pytest.mark.parametrize('views', [{}, {'axial': True, 'head_text': True, 'far': True}])
+@pytest.mark.parametrize('shape', [(1, 1), (1, 17), (3, 4), (10, 10), (13, 29), (32, 32)])
+def test_traced_head_is_the_head(shape, views, monkeypatch):
+    """A small map's head runs as a trace at inference: bit for bit the head as written."""
+    from spatial_grounding_ros.models import head as heads
+
+    head = random_model('t-rnet-attn', 5, seed=16, **views).head
+    for b in (1, 3):  # one map, and a map with its mirror images
+        z1, code = torch.randn(b, *shape), torch.randn(b, head.code_size)
+        far = torch.randn(b, *shape) if head.inputs == 3 else None
+        with torch.inference_mode():
+            traced = head(z1, code, far)
+            monkeypatch.setattr(heads, 'TRACED_CELLS', 0)
+            written = head(z1, code, far)
+            monkeypatch.undo()
+        assert torch.equal(traced, written), b
+    assert len(heads._TRACES[head]) == 2  # one per shape
+
+
+def test_a_traced_head_follows_its_own_weights_only():
+    """Trained in place, a head's trace follows; a copy's trace never reads the original's."""
+    import copy
+    from spatial_grounding_ros.models import head as heads
+
+    head = random_model('t-rnet-attn', 5, seed=17, axial=True, head_text=True, far=True).head
+    z1, code, far = torch.randn(1, 10, 10), torch.randn(1, head.code_size), torch.randn(1, 10, 10)
+    with torch.no_grad():
+        before = head(z1, code, far)
+        copied = copy.deepcopy(head)
+        copied.convs[0].weight.mul_(2)  # as an optimizer step changes it: in place
+        assert torch.equal(head(z1, code, far), before)
+        changed = copied(z1, code, far)
+        assert not torch.equal(changed, before)
+        head.convs[0].weight.mul_(2)
+        assert torch.equal(head(z1, code, far), changed)
+        for size in range(2, 4 + heads.TRACES_KEPT):
+            head(torch.randn(1, size, size), code, torch.randn(1, size, size))
+    assert len(heads._TRACES[head]) == heads.TRACES_KEPT

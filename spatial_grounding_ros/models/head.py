@@ -8,7 +8,10 @@
 
 from __future__ import annotations
 
+import collections
 import functools
+import warnings
+import weakref
 
 import torch
 from torch import nn
@@ -20,6 +23,15 @@ from .config import head_code_size, ModelConfig
 def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool):
     """Return a model's output: the value map, and with return_aux Z1 and the attention."""
     return (values, {'relation_map': z1, 'attention': attention}) if return_aux else values
+
+
+# One map of up to this many cells at inference runs a trace of the head (OutputHead.traced):
+# there its time is mostly Python around some 60 small tensor ops (0.53 -> 0.35 ms at 10x10)
+TRACED_CELLS = 32 * 32
+# each head's traces by input shape, at most TRACES_KEPT; kept outside the module so that a
+# copy of a head (copy.deepcopy: rl.py's target network) never runs on the original's weights
+TRACES_KEPT = 8
+_TRACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 @functools.lru_cache(maxsize=16)
@@ -101,8 +113,12 @@ class OutputHead(nn.Module):
         torch.memory_format, or None to choose (convolve).
         """
         h, w = z1.shape[1:]
+        if (layout is None and h * w <= TRACED_CELLS and not torch.is_grad_enabled()
+                and not torch.jit.is_tracing()):
+            return self.traced(z1, code, far)
         beta, film = code[:, :3], code[:, 3:] if self.film else None
-        gradients = gradient_maps(h, w, z1.device, self.gradient_cells).view(3, h * w)
+        # int(): in a trace the sizes are traced values; as ints the maps are its constant
+        gradients = gradient_maps(int(h), int(w), z1.device, self.gradient_cells).view(3, h * w)
         z2 = (beta @ gradients).view(-1, h, w)
         x = torch.stack([z1, z2] if far is None else [z1, z2, far], dim=1)
         if not (self.axial or self.film):
@@ -111,6 +127,35 @@ class OutputHead(nn.Module):
         x = self.convolve(x, first=0, last=1, film=film, layout=layout)
         views = {1: [AxialViews(x)]} if self.axial else None
         return self.tiled(x, first=1, views=views, layout=layout)
+
+    def traced(self, z1: torch.Tensor, code: torch.Tensor, far: torch.Tensor | None):
+        """
+        Run forward as a TorchScript trace of it for these inputs' shapes, made on first use.
+
+        A trace is the same tensor ops on the module's own parameters (trained in place, as
+        an optimizer does, it follows them), recorded for one shape: the map's size fixes
+        the gradient maps and each choice forward makes (layout, tiles, views), so each shape
+        has its own. Only without gradients: training runs forward itself.
+        """
+        traces = _TRACES.setdefault(self, collections.OrderedDict())
+        inputs = (z1, code) if far is None else (z1, code, far)
+        key = tuple((x.shape, x.dtype, x.device) for x in inputs)
+        trace = traces.pop(key, None)
+        if trace is None:
+            # made before, the gradient maps are a constant of the trace, not ops of it
+            gradient_maps(*z1.shape[1:], z1.device, self.gradient_cells)
+            with warnings.catch_warnings():
+                # its Python choices are the shape's, as meant. torch calls tracing deprecated
+                # for torch.export and torch.compile: an exported head ran slower than this
+                # one (0.8 ms at 10x10), and compiling needs a C++ toolchain and seconds at
+                # run time; the pinned torch traces
+                warnings.simplefilter('ignore', torch.jit.TracerWarning)
+                warnings.simplefilter('ignore', DeprecationWarning)
+                trace = torch.jit.trace(self, inputs, check_trace=False)
+            if len(traces) >= TRACES_KEPT:
+                traces.popitem(last=False)
+        traces[key] = trace
+        return trace(*inputs)
 
     def tiled(
         self,
