@@ -404,3 +404,44 @@ def test_every_generator_family_reads_back_as_the_place_it_names(puddleworld):
                 assert offset == (goal[0] - cell[0], goal[1] - cell[1]), text
             if family.startswith('extreme'):
                 assert set(ref.words) & set(EXTREME_SIDES), text
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('place the object under the rock', (8, 8)),
+        ('put the cup below the rock', (8, 8)),  # "cup" is no typo of "up" here
+        ('set it down below the horse', (5, 6)),
+        ('drop it under the star', (2, 1)),
+        ('place the object directly beneath the heart', (5, 3)),
+        ('could you put the box two cells left of the horse', (4, 4)),
+        ('can you place it under the star?', (2, 1)),
+        ('put the object on the rock', (7, 8)),
+    ],
+)
+def test_a_placing_goes_where_the_thing_is_put(puddleworld, text, goal):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[4, 3], grid[4, 6], grid[7, 8], grid[1, 1] = 5, 11, 8, 2  # heart, horse, rock, star
+    result = puddleworld.ground(grid, text)
+    assert result.intent == 'go' and result.goal == goal, (text, result.reason)
+
+
+@pytest.mark.parametrize(
+    'text, goals',
+    [
+        ('put the mug in the fridge', [beside((3, 3))]),
+        ('set the bag down next to the desk', [beside((5, 9))]),
+        ('take the cup from the desk and put it in the fridge', [beside((5, 9)), beside((3, 3))]),
+        ('go to the sofa and set it down', [beside((8, 6))]),  # on arrival: no place
+    ],
+)
+def test_a_placing_in_a_request_or_after_a_fetch(office, text, goals):
+    result = office.ground(office_map(office), text, robot_cell=(10, 10))
+    steps = result.steps or [result]
+    assert len(steps) == len(goals) and all(map(lands, steps, goals)), (text, result.reason)
+
+
+@pytest.mark.parametrize('text', ['put the cup down', 'please put it down', 'drop it off'])
+def test_a_placing_that_says_no_place_declines(office, text):
+    result = office.ground(office_map(office), text)
+    assert result.goal is None and result.reason.endswith('says no place')

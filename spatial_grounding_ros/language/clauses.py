@@ -19,8 +19,9 @@ return after a place ("and come back") is one more step: back where the robot is
 from __future__ import annotations
 
 from .checks import DIRECTIONS, NUMBERS
-from .phrases import find_phrase
-from .vocabulary import FILLERS, GO_VERBS, MOTIONS, PARTICLES
+from .phrases import find_phrase, phrase_at
+from .places import UNIT_WORDS
+from .vocabulary import FILLERS, GO_VERBS, MOTIONS, PARTICLES, REQUEST_OPENERS
 
 # conditions on a request, which the robot has no sensor to check
 CONDITIONS = (
@@ -70,6 +71,8 @@ COURTESIES = (
     "if it's not too much trouble", 'if it is not too much trouble', "if it's no trouble",
     "if it's ok", "if it's okay", "if that's ok", "if that's okay", 'if ok',
 )
+# what a placing opens with: "put the cup on the table", "drop it off by the door"
+PLACING_VERBS = frozenset('put place set drop leave deliver stash stow'.split())
 # verbs of what to do on arrival ("go to the couch and sit down"); a go verb ("wait by the
 # door", "stop two left of it") says where only when a landmark, "it" or a count follows it
 ACTIONS = frozenset(
@@ -79,11 +82,21 @@ ACTIONS = frozenset(
     relax charge dock face greet announce speak wave take grab pick fetch open close push
     pull lift carry clean play sing dance spin rotate wait stay stop pause
     """.split()
-) | frozenset(m.split()[0] for m in MOTIONS)
+) | frozenset(m.split()[0] for m in MOTIONS) | PLACING_VERBS
 # what a fetch opens with: "get a soda from the fridge"
 FETCH_VERBS = frozenset('get grab pick fetch take collect bring'.split())
 # ... and what says a way to go, not a thing: "get far away from the fridge"
 AWAY_WORDS = frozenset(DIRECTIONS) | frozenset('away far farther further clear back off'.split())
+# where a placing's place starts, after the thing placed: a relation word (a count only before
+# a unit or a side: "put two cups on ..." places cups)
+PLACE_OPENERS = frozenset(DIRECTIONS) | frozenset(
+    'on onto in into inside at by beside next near nearby close between behind to towards '
+    'toward directly just exactly right halfway'.split()
+)
+# ... a placing verb's particle after the thing ("set it down by", "drop it off at")
+PLACING_PARTICLES = frozenset('down off up back'.split())
+# ... and a place that is the landmark itself ("put it in the fridge": go to the fridge)
+INTO = frozenset('on onto in into inside at'.split())
 # between an action and the place before it
 JOINS = ('and then', 'then', 'and', 'and also', 'after that', 'and after that')
 # what may stand around a landmark in a list of places ("go to the couch and to the fridge")
@@ -183,6 +196,10 @@ def without_action(words: list[str], mentions) -> tuple[list[str], str | None]:
         clause = [w for w in words[i + len(p.split()):] if w not in FILLERS]
         if not clause or clause[0] not in ACTIONS or not mentions(words[:i]):
             continue
+        if clause[0] in PLACING_VERBS:  # "and put it down": "it" is the thing, put there
+            if placed(clause, mentions) is None:
+                return words[:i], ' '.join(clause)
+            continue
         counted = any(w in NUMBERS for w in clause) and any(w in DIRECTIONS for w in clause)
         if mentions(clause) or set(clause) & {'it', 'its'} or clause[0] in GO_VERBS and counted:
             continue
@@ -214,6 +231,49 @@ def fetched(words: list[str], mentions) -> tuple[list[str], bool]:
     if rest[end:end + 1] == ['to'] and mentions(rest[end + 1:]):  # "from the sofa to the desk"
         rest = [*rest[:end], 'then', 'go', 'to', *rest[end + 1:]]
     return ['go', 'to', *rest], words[1:2] == ['me'] and 'then' not in rest
+
+
+def placed(words: list[str], mentions, reads=None) -> list[str] | None:
+    """
+    Return a placing request's words as a go to its place, without the thing placed.
+
+    "put the cup on the table", "place the object under the rock", "set it down below the
+    horse": the robot takes the thing there, whatever it is called ("cup" is no typo of
+    "up" there), so the place after it is where to go; "in the fridge" and "on the table" are
+    the landmark's own place. A placing that says no place ("put the cup down") is None;
+    one whose place `reads` (words -> its Reference) has no Place goes to the network in the
+    words it learned one in ("place the object under ..."). Other words stay as they are.
+    """
+    kept = [w for w in words if w not in FILLERS]
+    opener = phrase_at(kept, 0, REQUEST_OPENERS)  # "could you put ..."
+    kept = kept[len(opener.split()):] if opener else kept
+    if not kept or kept[0] not in PLACING_VERBS:
+        return words
+
+    def opens(k: int) -> bool:
+        w, after = kept[k], kept[k + 1:k + 2]
+        if w in NUMBERS:
+            return bool(after) and (after[0] in UNIT_WORDS or after[0] in DIRECTIONS)
+        return w in PLACE_OPENERS
+
+    start = next((k for k in range(1, len(kept)) if opens(k)), None)
+    if start is None:
+        return None
+    # "set it down below the horse": the verb's particle, then the place
+    if kept[start] in PLACING_PARTICLES and start + 1 < len(kept) and opens(start + 1) and (
+        kept[start + 1] not in NUMBERS
+    ):
+        start += 1
+    place = kept[start:]
+    if all(w in PLACING_PARTICLES for w in place):  # "put the cup down": no place said
+        return None
+    found = mentions(place)
+    articles = found and all(w in ('the', 'a', 'an') for w in place[1:found[0].start])
+    if place[0] in INTO and articles:
+        place = ['to', *place[1:]]
+    go = ['go', *place]
+    # the network learned a placing as PuddleWorld's people said theirs
+    return go if reads is None or reads(go).place else ['place', 'the', 'object', *place]
 
 
 def without_return(words: list[str], mentions) -> tuple[list[str], bool]:

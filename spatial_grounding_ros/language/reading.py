@@ -51,8 +51,8 @@ from .checks import (
     relation_reason,
 )
 from .clauses import (
-    beside_negation, choice, condition, fetched, without_action, without_courtesies,
-    without_rejected, without_return,
+    beside_negation, choice, condition, fetched, placed, PLACING_VERBS, without_action,
+    without_courtesies, without_rejected, without_return,
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
@@ -100,7 +100,6 @@ PATH_ENDS = (
     frozenset('to toward towards and then until till at by near next beside of from for'.split())
     | frozenset(DIRECTIONS) | frozenset(NUMBERS) | GO_VERBS
 )
-
 
 DIRECTION_ENDS = frozenset('of from the a an to'.split())  # after a direction: "two left of"
 PLURAL_UNITS = frozenset(u for u in UNIT_WORDS if u.endswith('s'))  # "two cells", not "a cell"
@@ -182,8 +181,9 @@ class Reader:
             frozenset(DIRECTIONS) | frozenset(NUMBERS) | QUALIFIERS | CLAUSES | MAP_WORDS
             | COMMON_WORDS | wording_words() | STOP_WORDS | GO_VERBS | FILLERS | DEICTIC
             | PATH_WORDS | frozenset(LENGTH_UNITS) | frozenset(OPENING_VERBS) | PLACE_WORDS
-            | {w for p in (*NEGATIONS, *CORRECTIONS, *SEQUENCE_MARKS, *UNSUPPORTED,
-                           *QUESTION_OPENERS, *REQUEST_OPENERS) for w in tokenize(p)}
+            | PLACING_VERBS | {w for p in (*NEGATIONS, *CORRECTIONS, *SEQUENCE_MARKS,
+                                           *UNSUPPORTED, *QUESTION_OPENERS, *REQUEST_OPENERS)
+                               for w in tokenize(p)}
         )  # fmt: skip
         names = {w for n in model_names for w in tokenize(n.replace('_', ' '))}
         # a word that says what a landmark is: on another table, the network's own names
@@ -206,7 +206,7 @@ class Reader:
         # a question opens as one, or ends in "?" asking no one to go anywhere ("can you go
         # to the fridge?" and "let's go right of the spade, cool?" are requests)
         question = self.asks(parts[-1]) or (
-            text.rstrip().endswith('?') and not set(words) & GO_VERBS
+            text.rstrip().endswith('?') and not set(words) & (GO_VERBS | PLACING_VERBS)
         )
         words = without_rejected(words, self.lexicon.mentions)  # "instead of the fridge"
         fixed = self.corrected(words)
@@ -283,7 +283,7 @@ class Reader:
         opener = phrase_at(kept, 0, REQUEST_OPENERS)
         if opener is not None:
             n = len(opener.split())
-            return not set(kept[n:n + 2]) & GO_VERBS
+            return not set(kept[n:n + 2]) & (GO_VERBS | PLACING_VERBS)
         return phrase_at(kept, 0, QUESTION_OPENERS) is not None
 
     def negated(self, words: list[str]) -> str | None:
@@ -315,6 +315,8 @@ class Reader:
                 )
             words, mentions, notes = kept, self.lexicon.mentions(kept), (*notes, 'negation')
         words, brought = fetched(words, self.lexicon.mentions)  # "get a soda from the fridge"
+        if not mentions and placed(words, self.lexicon.mentions) is None:  # "put it down"
+            return Command(text, 'unsupported', (), f'unsupported: "{text}" says no place', notes)
         words, back = without_return(words, self.lexicon.mentions)  # "and come back"
         back = back or brought
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
@@ -346,15 +348,16 @@ class Reader:
                                'where the robot is, not a place on the map', notes)
             if found or deictic or not set(content) & (set(DIRECTIONS) | QUALIFIERS):
                 what = found[0][1] if found else ' '.join(content[:4])
-                return Command(
-                    text, 'unsupported', (),
-                    f'unsupported: "{what}" names no landmark or cell on the map', notes,
-                )  # fmt: skip
+                return Command(text, 'unsupported', (), f'unsupported: "{what}" names no '
+                               'landmark or cell on the map', notes)
         if choice(words, self.lexicon.mentions):  # "the fridge or the couch"
             ref = self.reference(words, cell_size)
             return Command(text, 'go', (replace(ref, reason='ambiguous: one place or another '
                                         'is named: say which'),), None, notes)
-        steps = split_steps(words, self.lexicon.mentions)
+        # "put the cup on the desk", "... and put it on the desk": a go to the place it reads
+        reads = functools.partial(self.reference, cell_size=cell_size)
+        steps = [placed(s, self.lexicon.mentions, reads) or s
+                 for s in split_steps(words, self.lexicon.mentions)]
         refs = tuple(self.reference(s, cell_size) for s in steps) + (RETURN_STEP,) * back
         return Command(text, 'sequence' if len(refs) > 1 else 'go', refs, None, notes)
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Callable
 
 from .checks import DIRECTIONS
-from .clauses import bare, listed
+from .clauses import bare, listed, PLACING_VERBS
 from .phrases import find_phrase
 from .vocabulary import GO_VERBS, SEQUENCE_MARKS
 
@@ -36,8 +36,8 @@ LATER_MARKS = (
 )
 # a step said of the one before
 BACK_REFERENCES = frozenset('that there it its those'.split())
-# ... but not what a step carries: "and bring it to the sofa"
-CARRY_VERBS = frozenset('bring take carry deliver'.split())
+# ... but not what a step carries: "and bring it to the sofa", "and put it on the desk"
+CARRY_VERBS = frozenset('bring take carry deliver'.split()) | PLACING_VERBS
 
 
 def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[str]]:
@@ -65,7 +65,8 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
     if places:
         return checked(places, words, mentions)
     # "go to the fridge and go to the couch": each part a place of its own
-    ands = [i for i, w in enumerate(words[:-1]) if w == 'and' and words[i + 1] in GO_VERBS]
+    ands = [i for i, w in enumerate(words[:-1])
+            if w == 'and' and words[i + 1] in GO_VERBS | PLACING_VERBS]
     if ands:
         bounds = [0, *ands, len(words)]
         cuts = [trimmed(words[a:b]) for a, b in zip(bounds, bounds[1:])]
