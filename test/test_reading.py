@@ -445,3 +445,23 @@ def test_a_placing_in_a_request_or_after_a_fetch(office, text, goals):
 def test_a_placing_that_says_no_place_declines(office, text):
     result = office.ground(office_map(office), text)
     assert result.goal is None and result.reason.endswith('says no place')
+
+
+@pytest.mark.parametrize(
+    'horse, text, goal',
+    [
+        ((4, 7), 'left of the horse and right of the heart', (4, 5)),  # between them
+        ((4, 7), 'go to the right of the heart and to the left of the horse', (4, 5)),
+        ((4, 5), 'the cell left of the horse and right of the heart', (4, 4)),  # one from each
+        ((6, 3), 'below the heart and above the horse', (5, 3)),
+        ((6, 4), 'below the heart and above the horse', None),  # no one cell: halfway is not
+        ((4, 6), 'left of the horse and right of the heart', None),  # an even gap
+        ((4, 7), 'right of the horse and left of the heart', None),  # no cell is both
+    ],
+)
+def test_a_cell_said_by_two_landmarks_sides(puddleworld, horse, text, goal):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[4, 3], grid[horse] = 5, 11  # heart, horse
+    result = puddleworld.ground(grid, text)
+    assert result.goal == goal, (text, result.reason)
+    assert goal is not None or result.reason.startswith('ambiguous')

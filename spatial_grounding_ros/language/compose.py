@@ -86,11 +86,24 @@ def compose(
         (a, pa, wa, ra), (b, pb, wb, rb) = map(locate.candidates, (place.landmark, place.other))
         reason = ra or rb
         cell = None
+        if reason is None and place.offset != (0, 0):
+            # "below the tree and above the horse": first, a cell one step from each
+            met = meeting(a, place.offset, b, place.other_offset, grid)
+            if met:
+                reason = None if len(met) == 1 else f'ambiguous: {len(met)} cells are ' + (
+                    f'{said_side(place.offset)} a {place.landmark.name} and '
+                    f'{said_side(place.other_offset)} a {place.other.name}')
+                return Composed(met[:1] if len(met) == 1 else [], pa * pb, reason, wa + wb)
         if reason is None:
             on = None if place.on is None else kinds.get(place.on)
             a, b, reason = closest_pair(a, b, grid, on, (place.landmark.name, place.other.name))
         if reason is None:
             cell, reason = midpoint(a, b, (place.landmark.name, place.other.name), cell_size)
+        if cell is not None and not (on_side(cell, a, place.offset)
+                                     and on_side(cell, b, place.other_offset)):
+            cell, reason = None, (f'ambiguous: no cell is {said_side(place.offset)} the '
+                                  f'{place.landmark.name} and {said_side(place.other_offset)} '
+                                  f'the {place.other.name}')
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
     if place.relation == 'row-col':  # past the learned counts: one's row, the other's column
         (a, pa, wa, ra), (b, pb, wb, rb) = locate(place.landmark), locate(place.other)
@@ -347,6 +360,30 @@ def closest_pair(a: list, b: list, grid: np.ndarray, on: int | None, names: tupl
 def _middle_holds(x, y, grid, kind, names) -> bool:
     cell, _ = midpoint(x, y, names)
     return cell is not None and int(grid[cell]) == kind
+
+
+def on_side(cell: tuple[int, int], landmark: np.ndarray, side: tuple[int, int]) -> bool:
+    """Say whether a cell lies past a landmark's cells on a side ((0, -1): west; (0, 0): any)."""
+    for axis in (0, 1):
+        if side[axis] < 0 and not cell[axis] < landmark[:, axis].min():
+            return False
+        if side[axis] > 0 and not cell[axis] > landmark[:, axis].max():
+            return False
+    return True
+
+
+def meeting(a: list, side_a, b: list, side_b, grid: np.ndarray) -> list:
+    """Return [(cell, 1.0)] for each cell one step on `side_a` of an `a` and `side_b` of a `b`."""
+    def steps(found, side):
+        return {(int(r) + side[0], int(c) + side[1]) for x in found for r, c in x
+                if on_side((r + side[0], c + side[1]), x, side)}
+    cells = steps(a, side_a) & steps(b, side_b)
+    return [(c, 1.0) for c in sorted(cells) if inside(grid, c)]
+
+
+def said_side(side: tuple[int, int]) -> str:
+    """Return a one-step side in words: (0, -1) is 'left of'."""
+    return {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'left of', (0, 1): 'right of'}[side]
 
 
 def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str], cell_size=None):

@@ -285,7 +285,14 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
         j = words.index('and', slots[0] + 1)
         first = parse_offset(words[:slots[0]])
         second = parse_offset(words[j + 1:slots[1]])
-        if first is None or second is None or first[1] or second[0] or words[slots[0] + 1:j]:
+        if first is None or second is None or words[slots[0] + 1:j]:
+            return None
+        counted = any(w in NUMBERS for w in words[:slots[1]])
+        if not counted and 0 in first and first == (-second[0], -second[1]):
+            # "left of the horse and right of the heart": between them, on those sides
+            return Place('between', Landmark(names[words[slots[0]]]), first,
+                         Landmark(names[words[slots[1]]]), second, on=on)
+        if first[1] or second[0]:
             return None
         return Place('row-col', Landmark(names[words[slots[0]]]), first,
                      Landmark(names[words[slots[1]]]), second, on=on)
