@@ -457,6 +457,8 @@ def test_a_placing_that_says_no_place_declines(office, text):
         ((6, 4), 'below the heart and above the horse', None),  # no one cell: halfway is not
         ((4, 6), 'left of the horse and right of the heart', None),  # an even gap
         ((4, 7), 'right of the horse and left of the heart', None),  # no cell is both
+        ((4, 7), 'three left of the horse and one right of the heart', (4, 4)),  # counts: exact
+        ((4, 7), 'one left of the horse and one right of the heart', None),  # no one cell
     ],
 )
 def test_a_cell_said_by_two_landmarks_sides(puddleworld, horse, text, goal):

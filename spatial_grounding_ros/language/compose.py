@@ -82,17 +82,19 @@ def compose(
                             'not known')
         return Composed([(tuple(robot_cell), 1.0)], 1.0)
     locate = Locator(table, grid, kinds, network, judge, robot_cell)
-    if place.relation == 'between':
+    if place.relation in ('between', 'both'):
         (a, pa, wa, ra), (b, pb, wb, rb) = map(locate.candidates, (place.landmark, place.other))
         reason = ra or rb
         cell = None
         if reason is None and place.offset != (0, 0):
-            # "below the tree and above the horse": first, a cell one step from each
+            # "below the tree and above the horse": first, the cell at those sides of both
             met = meeting(a, place.offset, b, place.other_offset, grid)
-            if met:
-                reason = None if len(met) == 1 else f'ambiguous: {len(met)} cells are ' + (
-                    f'{said_side(place.offset)} a {place.landmark.name} and '
-                    f'{said_side(place.other_offset)} a {place.other.name}')
+            if met or place.relation == 'both':  # counts said: that cell, or none
+                both = place.relation == 'both'
+                said = (f'{said_side(place.offset, both)} a {place.landmark.name} and '
+                        f'{said_side(place.other_offset, both)} a {place.other.name}')
+                n = len(met) or 'no'
+                reason = None if len(met) == 1 else f'ambiguous: {n} cells are {said}'
                 return Composed(met[:1] if len(met) == 1 else [], pa * pb, reason, wa + wb)
         if reason is None:
             on = None if place.on is None else kinds.get(place.on)
@@ -373,17 +375,19 @@ def on_side(cell: tuple[int, int], landmark: np.ndarray, side: tuple[int, int]) 
 
 
 def meeting(a: list, side_a, b: list, side_b, grid: np.ndarray) -> list:
-    """Return [(cell, 1.0)] for each cell one step on `side_a` of an `a` and `side_b` of a `b`."""
-    def steps(found, side):
-        return {(int(r) + side[0], int(c) + side[1]) for x in found for r, c in x
-                if on_side((r + side[0], c + side[1]), x, side)}
+    """Return [(cell, 1.0)] for each cell at `side_a` from an `a` and at `side_b` from a `b`."""
+    def steps(found, offset):
+        return {(int(r) + offset[0], int(c) + offset[1]) for x in found for r, c in x
+                if on_side((r + offset[0], c + offset[1]), x, offset)}
     cells = steps(a, side_a) & steps(b, side_b)
     return [(c, 1.0) for c in sorted(cells) if inside(grid, c)]
 
 
-def said_side(side: tuple[int, int]) -> str:
-    """Return a one-step side in words: (0, -1) is 'left of'."""
-    return {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'left of', (0, 1): 'right of'}[side]
+def said_side(offset: tuple[int, int], counted: bool = False) -> str:
+    """Return an offset along one axis in words: (0, -1) is 'left of' (counted: '1 left of')."""
+    n = max(map(abs, offset))
+    side = {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'left of', (0, 1): 'right of'}
+    return (f'{n} ' if counted or n > 1 else '') + side[(offset[0] // n, offset[1] // n)]
 
 
 def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str], cell_size=None):

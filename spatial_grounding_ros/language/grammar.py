@@ -287,11 +287,13 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
         second = parse_offset(words[j + 1:slots[1]])
         if first is None or second is None or words[slots[0] + 1:j]:
             return None
-        counted = any(w in NUMBERS for w in words[:slots[1]])
-        if not counted and 0 in first and first == (-second[0], -second[1]):
-            # "left of the horse and right of the heart": between them, on those sides
-            return Place('between', Landmark(names[words[slots[0]]]), first,
-                         Landmark(names[words[slots[1]]]), second, on=on)
+        opposite = first[0] * second[0] < 0 or first[1] * second[1] < 0
+        if 0 in first and 0 in second and opposite:
+            # "left of the horse and right of the heart": between them, on those sides; "one
+            # left of the horse and two right of the heart": the cell at both offsets
+            counted = any(w in NUMBERS for w in words[:slots[1]])
+            return Place('both' if counted else 'between', Landmark(names[words[slots[0]]]),
+                         first, Landmark(names[words[slots[1]]]), second, on=on)
         if first[1] or second[0]:
             return None
         return Place('row-col', Landmark(names[words[slots[0]]]), first,

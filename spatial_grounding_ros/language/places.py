@@ -102,7 +102,9 @@ class Place:
     A place an instruction names. Offsets are (rows, cols); row 0 is north.
 
     - 'landmark': `offset` from `landmark` ((0, 0): the landmark's own cell);
-    - 'between': the midpoint of `landmark` and `other`;
+    - 'between': the midpoint of `landmark` and `other`, on the sides `offset` and
+      `other_offset` of each if they are not (0, 0) ("left of the horse and right of the heart");
+    - 'both': the cell at `offset` from `landmark` and at `other_offset` from `other`;
     - 'row-col': the row `offset` from `landmark`, the column `other_offset` from `other`;
     - 'corner': the map's corner `side` ('north-west' ...);
     - 'edge': the middle of the map's side `side` ('east' ...);
@@ -164,7 +166,7 @@ def learned_counts(place: Place) -> bool:
 
 def composed(place: Place) -> bool:
     """Say whether a place is grounded by composing the network's groundings (not read whole)."""
-    if place.relation in ('between', 'corner', 'edge', 'robot'):
+    if place.relation in ('between', 'both', 'corner', 'edge', 'robot'):
         return True
     if place.relation == 'row-col':
         return not learned_counts(place)
