@@ -23,7 +23,7 @@ refuses it at once as `busy` when max_pending_requests are in flight.
 Threads: inputs, status, lifecycle and topic groundings on maps of up to INLINE_CELLS cells run
 in the spinning thread (spin()'s ServingExecutor); larger maps' on a thread the inputs wake;
 service requests on max_pending_requests + 1 threads: a long grounding neither stops the status
-nor the inputs. One grounding runs at a time (the model lock).
+nor the inputs. One grounding runs at a time (the model lock, taken again by its holder).
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ class GrounderNode(LifecycleNode):
         self.robot_yaw: float | None = None  # of the latest robot_pose (goal_heading: keep)
         # the latest robot_pose's (x, y): an approach goal is the side the robot reaches first
         self.robot_xy: tuple[float, float] | None = None
-        self.model_lock = threading.Lock()  # one grounding at a time: torch, the text cache
+        self.model_lock = threading.RLock()  # one grounding at a time: torch, the text cache
         self.state_lock = threading.RLock()  # the hold and the map, shared by the callbacks
         self.requests = 0  # ground_instruction requests in flight
         self.grounding = ''  # the instruction a topic grounding works on
@@ -347,16 +347,12 @@ class GrounderNode(LifecycleNode):
         if dropped is None:
             return
         if dropped.why == 'expired':
-            message = (
-                f'instruction {dropped.text!r} expired: no valid entity_map within '
-                f'instruction_timeout={self.param("instruction_timeout"):g} s; dropped, '
-                'send it again'
-            )
+            message = (f'instruction {dropped.text!r} expired: no valid entity_map within '
+                       f'instruction_timeout={self.param("instruction_timeout"):g} s; dropped, '
+                       'send it again')
         else:
-            message = (
-                f'instruction {dropped.text!r} dropped: a newer instruction came before it '
-                'was grounded'
-            )
+            message = (f'instruction {dropped.text!r} dropped: a newer instruction came before '
+                       'it was grounded')
         self.report('instruction', DiagnosticStatus.WARN, message, dropped=dropped.text)
 
     @guarded('robot_pose')
@@ -393,12 +389,14 @@ class GrounderNode(LifecycleNode):
         return Poser(map_msg.info, header, self.param('goal_heading'), self.robot_yaw)
 
     def ground_soon(self) -> None:
-        """Ground the held instruction: a small map's here, unless the model is busy."""
+        """Ground the held instruction: a small map's here, if the model is free (taken first)."""
         small = self.grid is not None and self.grid.size <= INLINE_CELLS
-        if small and self.topic_grounding.idle() and not self.model_lock.locked():
+        if not (small and self.topic_grounding.idle() and self.model_lock.acquire(blocking=False)):
+            return self.topic_grounding.wake()  # it takes the held instruction once it is free
+        try:  # taken before: no service request takes the model between the check and this
             self.ground_held()
-        else:
-            self.topic_grounding.wake()  # it takes the held instruction once it is free
+        finally:
+            self.model_lock.release()
 
     @guarded('grounding')
     def ground_held(self) -> None:
