@@ -467,3 +467,19 @@ def test_a_cell_said_by_two_landmarks_sides(puddleworld, horse, text, goal):
     result = puddleworld.ground(grid, text)
     assert result.goal == goal, (text, result.reason)
     assert goal is not None or result.reason.startswith('ambiguous')
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('one below the rock and one over to the left', (8, 7)),
+        ('go over to the left of the rock', (7, 7)),
+        ('walk down to the rock', (7, 8)),  # "down to": the verb's, no side
+        ('one above the rock and two down to the left', None),  # down and left: opposite sides
+    ],
+)
+def test_a_side_word_before_to_is_read_one_way(puddleworld, text, goal):
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[7, 8] = 8  # rock
+    result = puddleworld.ground(grid, text)
+    assert result.goal == goal, (text, result.reason)

@@ -166,6 +166,20 @@ def kindless_pick(words: list[str]) -> str | None:
     return picked and f'ambiguous: "{picked}" names no kind of landmark to pick one of'
 
 
+def particle(words: list[str], i: int) -> bool:
+    """
+    Say whether words[i] is a verb's particle, no side: "walk over to", "go up to the door".
+
+    "Over" right before "to" is one ("one over to the left": one to the left); "up" or "down"
+    there too, unless a side follows ("two down to the left" is down and left); another
+    side word is a side ("left to the rock").
+    """
+    if words[i] not in ('over', 'up', 'down') or words[i + 1:i + 2] != ['to']:
+        return False
+    after = [w for w in words[i + 2:i + 4] if w not in ('the', 'a')][:1]
+    return words[i] == 'over' or not after or after[0] not in DIRECTIONS
+
+
 def opposite_sides(words: list[str], mentions: list[Mention]) -> str | None:
     """
     Return why one landmark said with steps on both sides of an axis fits no cell, or None.
@@ -176,9 +190,8 @@ def opposite_sides(words: list[str], mentions: list[Mention]) -> str | None:
     """
     if len(mentions) != 1 or words[mentions[0].end:mentions[0].end + 1] != ['and']:
         return None
-    # a side word before "to" is none: "one over to the left"
-    sides = [(DIRECTIONS[w], i) for i, w in enumerate(words) if w in DIRECTIONS
-             and words[i + 1:i + 2] != ['to']]
+    sides = [(DIRECTIONS[w], i) for i, w in enumerate(words)
+             if w in DIRECTIONS and not particle(words, i)]
     before = [d for d, i in sides if i < mentions[0].start]
     after = [d for d, i in sides if i > mentions[0].end]
     if any(a[k] * b[k] < 0 for a in before for b in after for k in (0, 1)):

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import functools
 
-from .checks import ADJECTIVES, DIRECTIONS, NUMBERS
+from .checks import ADJECTIVES, DIRECTIONS, NUMBERS, particle
 from .places import (
     ANY_WORDS,
     EDGE_NOUNS,
@@ -113,9 +113,7 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
     """
     dr = dc = 0
     count, i, seen = None, 0, False
-    # "one over to the left": "over" before "to" is no side
-    kept = [w for i, w in enumerate(words)
-            if w not in OFFSET_GLUE and not (w == 'over' and words[i + 1:i + 2] == ['to'])]
+    kept = [w for i, w in enumerate(words) if w not in OFFSET_GLUE and not particle(words, i)]
     while i < len(kept):
         w = kept[i]
         if w in INTENSIFIERS and kept[i + 1:i + 2] and DIRECTIONS.get(kept[i + 1], (0, 0))[0]:
@@ -237,7 +235,7 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
     verbs = [i for i, w in enumerate(words[:lead]) if w in GO_VERBS]
     if verbs:
         words = words[verbs[-1] + 1:]
-    words = [w for i, w in enumerate(words) if not _particle(words, i)]
+    words = [w for i, w in enumerate(words) if not particle(words, i)]
     while words and (words[0] in _OPENING or words[:2] in _VERB_TO) and not (
         words[0] == 'cell' and words[1:2] == ['with']
     ):
@@ -338,14 +336,6 @@ def _superlatives(words: list[str]) -> list[str]:
         else:
             out.append(w)
     return out
-
-
-def _particle(words: list[str], i: int) -> bool:
-    """Say whether words[i] is a verb's particle: "walk over to the spot", "go up to the door"."""
-    if words[i] not in ('over', 'up', 'down') or words[i + 1:i + 2] != ['to']:
-        return False
-    after = [w for w in words[i + 2:i + 4] if w not in ('the', 'a')][:1]
-    return not after or after[0] not in DIRECTIONS
 
 
 def _landmark_start(words: list[str], slot: int) -> int:
