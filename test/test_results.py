@@ -464,6 +464,28 @@ def check_prose(text: str) -> list[str]:
     compare('declined', figures[4:6], [h['declined'] for h in human], same_percent)
     compare('answers exact', figures[6:8], [h['hit_answered'] for h in human], same_percent)
     compare('calibration error', figures[8:9], [honesty['ece']['both']], same_number)
+    # speed: results/bench.json (make bench)
+    run = json.loads((RESULTS / 'bench.json').read_text())
+    by_map = {row['map']: row for row in run['sizes']}
+    figures = said(
+        text,
+        '`Grounder.ground` takes {}x it at 10x10 (target 5), {}x at 128x128 and {}x at '
+        '512x512, and a 1024x1024 map {} ms in {} MB',
+    )
+    ratios = [by_map[m]['ground_over_yardstick'] for m in ('10x10', '128x128', '512x512')]
+    compare('ground / yardstick', figures[0:3], ratios, same_number)
+    largest = by_map['1024x1024']
+    compare('1024x1024', figures[3:5],
+            [largest['ground_cached']['p50_ms'], largest['peak_rss_mb']], same_number)
+    figures = said(
+        text,
+        "the node's round trip for a new instruction, p50 {} and p99 {} ms (target 2.5 and 5: "
+        'missed, and where the time goes), {} and {} ms for one it has grounded before and {} '
+        'and {} ms for an echo node',
+    )
+    trips = [run[k][p] for k in ('ros_end_to_end', 'ros_end_to_end_repeated', 'ros_echo')
+             for p in ('p50_ms', 'p99_ms')]
+    compare('node round trip', figures, trips, same_number)
     # ShapeWorld: results/shapeworld.json (make reproduce-shapeworld)
     runs = {r['model']: r for r in shapeworld_results()['runs']}
     rnet, vgg = runs['t-rnet-attn'], runs['t-vgg']
