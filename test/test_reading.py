@@ -483,3 +483,15 @@ def test_a_side_word_before_to_is_read_one_way(puddleworld, text, goal):
     grid[7, 8] = 8  # rock
     result = puddleworld.ground(grid, text)
     assert result.goal == goal, (text, result.reason)
+
+
+@pytest.mark.parametrize(
+    'text',
+    ['the chair nearest to me', 'go to the chair near me', 'the chair closest to the robot',
+     'the nearest chair to you'],
+)
+def test_a_landmark_nearest_the_robot_said_of_it(office, text):
+    """The chair nearest the robot, at (10, 10): (9, 2), not (2, 8); without its cell, asked."""
+    grid = office_map(office)
+    assert lands(office.ground(grid, text, robot_cell=(10, 10)), beside((9, 2))), text
+    assert office.ground(grid, text).reason.startswith('ambiguous: said of the robot'), text

@@ -139,6 +139,9 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
     return (dr, dc) if seen and count is None else None
 
 
+# the robot, or the one who speaks to it (where the robot is, as for "bring me"), in "the
+# chair nearest to me"
+SPOKEN_TO = frozenset('me us you yourself robot'.split())
 # said after a landmark's name, of another ("the chair near the sofa"): the one nearest it
 NEAR_AFTER = (['near'], ['by'], ['beside'], ['next'], ['close'], ['closer'], ['nearer'])
 # skipped in a landmark's words: "the heart that's left of the horse"
@@ -191,6 +194,12 @@ def _landmark_of(said: tuple[str, ...], named: tuple) -> Landmark | None:
         return None
     if not before and not after:
         return Landmark(name)
+    # "the chair nearest to me", "the nearest chair to you", "the chair near me": the robot's
+    tail = [w for w in after if w != 'to']
+    if tail[-1:] and tail[-1] in SPOKEN_TO and len(before + tail) == 2 and (
+        (before + tail)[0] in NEAR_WORDS or [(before + tail)[0]] in NEAR_AFTER
+    ):
+        return Landmark(name, 'closest', anchor=Landmark(ROBOT))
     # "the nearest chair"; "any chair", "either chair": the one nearest the robot
     if len(before) == 1 and not after and before[0] in NEAR_WORDS | ANY_WORDS:
         return Landmark(name, 'closest', anchor=Landmark(ROBOT))

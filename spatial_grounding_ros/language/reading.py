@@ -94,7 +94,6 @@ from ..core.text import tokenize
 INTENTS = ('go', 'stop', 'question', 'sequence', 'negation', 'unsupported')
 SLOT = '@'  # a landmark's slot in a reference's words: '@0', '@1', ... (tokens have no '@')
 
-
 # the words a path passed ends before: where the place to go is said
 PATH_ENDS = (
     frozenset('to toward towards and then until till at by near next beside of from for'.split())
@@ -377,7 +376,8 @@ class Reader:
             and not w.isdigit()
         ]  # fmt: skip
         slotted, slots = slot(words, mentions)
-        slotted = [w for w in slotted if w not in FILLERS] or slotted
+        slotted = [w for k, w in enumerate(slotted)  # "the robot" is no filler
+                   if w not in FILLERS or slotted[k - 1:k] == ['the']] or slotted
         named = {f'{SLOT}{k}': self.lexicon.table.names[m.kind] for k, m in enumerate(slots)}
         place = None if unknown else parse(slotted, named)  # the typed place (places.py)
         reason = self.reason_of(words, mentions, unknown, place)
