@@ -495,3 +495,17 @@ def test_a_landmark_nearest_the_robot_said_of_it(office, text):
     grid = office_map(office)
     assert lands(office.ground(grid, text, robot_cell=(10, 10)), beside((9, 2))), text
     assert office.ground(grid, text).reason.startswith('ambiguous: said of the robot'), text
+
+
+def test_between_the_two_of_a_kind(office, puddleworld):
+    """Say 'between the two chairs' of the map's two; one sofa, or three trees, are not two."""
+    grid = office_map(office)
+    assert office.ground(grid, 'go between the two chairs').goal == (5, 5)
+    assert office.ground(grid, 'between the two sofas').reason.startswith('ambiguous: 1 sofa')
+    grid = np.zeros((10, 10), dtype=np.int64)
+    grid[2, 2] = grid[2, 6] = grid[7, 7] = 9  # three trees
+    grid[2, 4] = 10  # a house between two of them
+    assert puddleworld.ground(grid, 'reach house between two trees').goal == (2, 4)
+    assert puddleworld.ground(grid, 'the cell between the trees').reason.startswith(
+        'ambiguous: 3 trees'
+    )

@@ -96,6 +96,10 @@ def compose(
                 n = len(met) or 'no'
                 reason = None if len(met) == 1 else f'ambiguous: {n} cells are {said}'
                 return Composed(met[:1] if len(met) == 1 else [], pa * pb, reason, wa + wb)
+        if reason is None and place.landmark == place.other:  # "between the two chairs"
+            n, name, b = len(a), place.landmark.name, a  # two of the same landmarks
+            if n < 2 or n > 2 and place.on is None:  # ("the house between two trees": any)
+                reason = f'ambiguous: {n} {name}{"s" * (n != 1)} on the map, not two to be between'
         if reason is None:
             on = None if place.on is None else kinds.get(place.on)
             a, b, reason = closest_pair(a, b, grid, on, (place.landmark.name, place.other.name))
@@ -349,7 +353,9 @@ def closest_pair(a: list, b: list, grid: np.ndarray, on: int | None, names: tupl
     a landmark named on the goal ("the horse between the circle and the tree"), the pairs whose
     middle holds it first. A tie is declined.
     """
-    pairs = [(x, y) for x in a for y in b if x is not y]
+    # of one list (two of a kind), each pair once
+    pairs = [(x, y) for i, x in enumerate(a) for j, y in enumerate(b)
+             if x is not y and (a is not b or i < j)]
     if on is not None:
         holding = [(x, y) for x, y in pairs if _middle_holds(x, y, grid, on, names)]
         pairs = holding or pairs

@@ -278,16 +278,7 @@ def parse(words: list[str], names: dict[str, str]) -> Place | None:
         landmark = _landmark(words[start:], names)  # "halfway to the fridge": from the robot
         return None if landmark is None else Place('between', Landmark(ROBOT), other=landmark)
     if 'between' in words:
-        k = words.index('between')
-        lead = [w for w in words[:k] if w not in PLACE_NOUNS]
-        rest = words[k + 1:]
-        if 'and' not in rest or lead not in ([], *([w] for w in HALFWAY_WORDS), ['middle']):
-            return None
-        j = rest.index('and')
-        a, b = _landmark(rest[:j], names), _landmark(rest[j + 1:], names)
-        if a is None or b is None:
-            return None
-        return Place('between', a, other=b, on=on)
+        return _between(words, names, on)
     if len(slots) == 2 and 'and' in words[slots[0] + 1:slots[1]]:  # row-col
         j = words.index('and', slots[0] + 1)
         first = parse_offset(words[:slots[0]])
@@ -345,6 +336,23 @@ def _superlatives(words: list[str]) -> list[str]:
         else:
             out.append(w)
     return out
+
+
+def _between(words: list[str], names: dict[str, str], on: str | None) -> Place | None:
+    """Return the between place of "(halfway) between A and B", "between the two chairs"."""
+    k = words.index('between')
+    lead = [w for w in words[:k] if w not in PLACE_NOUNS]
+    rest = words[k + 1:]
+    if lead not in ([], *([w] for w in HALFWAY_WORDS), ['middle']):
+        return None
+    if [w for w in rest if w not in ('the', 'two', '2', 'both')] in ([w] for w in names):
+        kind = Landmark(names[rest[-1]])  # "between the two chairs": two of a kind
+        return Place('between', kind, other=kind, on=on)
+    if 'and' not in rest:
+        return None
+    j = rest.index('and')
+    a, b = _landmark(rest[:j], names), _landmark(rest[j + 1:], names)
+    return None if a is None or b is None else Place('between', a, other=b, on=on)
 
 
 def _landmark_start(words: list[str], slot: int) -> int:
