@@ -509,3 +509,18 @@ def test_between_the_two_of_a_kind(office, puddleworld):
     assert puddleworld.ground(grid, 'the cell between the trees').reason.startswith(
         'ambiguous: 3 trees'
     )
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('go to the left of the fridge, not the right', (3, 2)),  # the side said again
+        ('left of the sofa, not the right side', (8, 5)),
+        ('go to the fridge, not the right', None),  # which side, then? declined
+        ('go to whichever chair is closer', beside((9, 2))),  # nearest the robot at (10, 10)
+        ('the chair that is closest', beside((9, 2))),
+    ],
+)
+def test_a_side_set_aside_and_the_closer_one(office, text, goal):
+    result = office.ground(office_map(office), text, robot_cell=(10, 10))
+    assert lands(result, goal), (text, result.reason)

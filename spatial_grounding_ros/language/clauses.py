@@ -48,6 +48,8 @@ OF_WORDS = frozenset(DIRECTIONS) | frozenset(
 PERCEIVING = frozenset('see spot notice find hear detect sense encounter smell'.split())
 # between a place negated and the place to go ("don't go to the fridge, just go to the sofa")
 JOINERS = FILLERS | frozenset('and but instead rather so then'.split())
+# around a side said again ("not the right side of it")
+SIDE_GLUE = frozenset('the a one on side of it to hand'.split())
 # what sets a place aside for another ("the sofa instead of the fridge")
 REJECTED = ('instead of', 'rather than', 'in place of', 'as opposed to')
 # a return said after a place ("go to the fridge and come back"), the whole clause
@@ -138,8 +140,11 @@ def beside_negation(words: list[str], negation: str, mentions) -> list[str] | No
     """
     [(i, _), *_] = find_phrase(words, (negation,))
     named = mentions(words[i:])
-    if not named:
-        return None
+    if not named:  # "left of the fridge, not the right (side)": the side said first
+        said = [w for w in words[i + len(negation.split()):] if w not in SIDE_GLUE]
+        before = [w for w in words[:i] if w not in JOINERS]
+        sides = said and all(w in DIRECTIONS for w in said) and set(before) & set(DIRECTIONS)
+        return before if sides and mentions(before) else None
     before, after = words[:i], words[i + named[0].end:]
     joined = set()
     while after and after[0] in JOINERS:

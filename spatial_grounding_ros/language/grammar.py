@@ -200,8 +200,12 @@ def _landmark_of(said: tuple[str, ...], named: tuple) -> Landmark | None:
         (before + tail)[0] in NEAR_WORDS or [(before + tail)[0]] in NEAR_AFTER
     ):
         return Landmark(name, 'closest', anchor=Landmark(ROBOT))
-    # "the nearest chair"; "any chair", "either chair": the one nearest the robot
-    if len(before) == 1 and not after and before[0] in NEAR_WORDS | ANY_WORDS:
+    # "the nearest chair"; "any chair", "either chair", "whichever chair is closer": the one
+    # nearest the robot
+    said_near = after in (['closer'], ['nearer'], ['closest'], ['nearest'])
+    if before in ([w] for w in NEAR_WORDS | ANY_WORDS) and not after or (
+        before in ([], *([w] for w in ANY_WORDS)) and said_near
+    ):
         return Landmark(name, 'closest', anchor=Landmark(ROBOT))
     if len(before) == 1 and not after and before[0] in SUPERLATIVES:
         return Landmark(name, 'extreme', SUPERLATIVES[before[0]])
