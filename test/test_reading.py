@@ -506,7 +506,7 @@ def test_between_the_two_of_a_kind(office, puddleworld):
     grid[2, 2] = grid[2, 6] = grid[7, 7] = 9  # three trees
     grid[2, 4] = 10  # a house between two of them
     assert puddleworld.ground(grid, 'reach house between two trees').goal == (2, 4)
-    assert puddleworld.ground(grid, 'the cell between the trees').reason.startswith(
+    assert puddleworld.ground(grid, 'the cell between two trees').reason.startswith(
         'ambiguous: 3 trees'
     )
 

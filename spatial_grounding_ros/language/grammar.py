@@ -349,7 +349,8 @@ def _between(words: list[str], names: dict[str, str], on: str | None) -> Place |
     rest = words[k + 1:]
     if lead not in ([], *([w] for w in HALFWAY_WORDS), ['middle']):
         return None
-    if [w for w in rest if w not in ('the', 'two', '2', 'both')] in ([w] for w in names):
+    two = set(rest) & {'two', '2', 'both'}  # said: "between horse" is no pair of horses
+    if two and [w for w in rest if w not in ('the', 'two', '2', 'both')] in ([w] for w in names):
         kind = Landmark(names[rest[-1]])  # "between the two chairs": two of a kind
         return Place('between', kind, other=kind, on=on)
     if 'and' not in rest:
