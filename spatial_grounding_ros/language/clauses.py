@@ -160,6 +160,13 @@ def beside_negation(words: list[str], negation: str, mentions) -> list[str] | No
     return places[0] if len(places) == 1 else None
 
 
+def without_fillers(words: list[str]) -> list[str]:
+    """Return the words without fillers, but "the robot" said last ("closest to the robot")."""
+    return [w for k, w in enumerate(words) if w not in FILLERS or (
+        w == 'robot' and words[k - 1:k] == ['the'] and all(x in FILLERS for x in words[k + 1:])
+    )]
+
+
 def without_courtesies(words: list[str]) -> list[str]:
     """Return the words without a courtesy worded as a condition ("if you can")."""
     for i, p in reversed(find_phrase(words, COURTESIES)):

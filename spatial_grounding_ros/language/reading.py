@@ -52,7 +52,7 @@ from .checks import (
 )
 from .clauses import (
     beside_negation, choice, condition, fetched, placed, PLACING_VERBS, without_action,
-    without_courtesies, without_rejected, without_return,
+    without_courtesies, without_fillers, without_rejected, without_return,
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
@@ -376,8 +376,7 @@ class Reader:
             and not w.isdigit()
         ]  # fmt: skip
         slotted, slots = slot(words, mentions)
-        slotted = [w for k, w in enumerate(slotted)  # "the robot" is no filler
-                   if w not in FILLERS or slotted[k - 1:k] == ['the']] or slotted
+        slotted = without_fillers(slotted) or slotted
         named = {f'{SLOT}{k}': self.lexicon.table.names[m.kind] for k, m in enumerate(slots)}
         place = None if unknown else parse(slotted, named)  # the typed place (places.py)
         reason = self.reason_of(words, mentions, unknown, place)
