@@ -18,7 +18,7 @@ return after a place ("and come back") is one more step: back where the robot is
 
 from __future__ import annotations
 
-from .checks import DIRECTIONS, NUMBERS
+from .checks import ARTICLES, DIRECTIONS, NUMBERS
 from .phrases import find_phrase, phrase_at
 from .places import UNIT_WORDS
 from .vocabulary import FILLERS, GO_VERBS, MOTIONS, PARTICLES, REQUEST_OPENERS
@@ -256,7 +256,7 @@ def placed(words: list[str], mentions, reads=None) -> list[str] | None:
     one whose place `reads` (words -> its Reference) has no Place goes to the network in the
     words it learned one in ("place the object under ..."). Other words stay as they are.
     """
-    kept = [w for w in words if w not in FILLERS]
+    kept = without_fillers(words)
     opener = phrase_at(kept, 0, REQUEST_OPENERS)  # "could you put ..."
     kept = kept[len(opener.split()):] if opener else kept
     if not kept or kept[0] not in PLACING_VERBS:
@@ -280,7 +280,7 @@ def placed(words: list[str], mentions, reads=None) -> list[str] | None:
     if all(w in PLACING_PARTICLES for w in place):  # "put the cup down": no place said
         return None
     found = mentions(place)
-    articles = found and all(w in ('the', 'a', 'an') for w in place[1:found[0].start])
+    articles = found and all(w in ARTICLES for w in place[1:found[0].start])
     if place[0] in INTO and articles:
         place = ['to', *place[1:]]
     go = ['go', *place]

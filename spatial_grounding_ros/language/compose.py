@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from .places import Landmark, ORDINAL_WORDS, PICKED, Place, ROBOT, SIDES
+from .places import Landmark, ORDINAL_WORDS, PICKED, Place, ROBOT, side_words, SIDES
 from ..core.entities import EntityTable
 from ..core.footprints import anchor, footprints, side_of
 
@@ -84,32 +84,8 @@ def compose(
     locate = Locator(table, grid, kinds, network, judge, robot_cell)
     if place.relation in ('between', 'both'):
         (a, pa, wa, ra), (b, pb, wb, rb) = map(locate.candidates, (place.landmark, place.other))
-        reason = ra or rb
-        cell = None
-        if reason is None and place.offset != (0, 0):
-            # "below the tree and above the horse": first, the cell at those sides of both
-            met = meeting(a, place.offset, b, place.other_offset, grid)
-            if met or place.relation == 'both':  # counts said: that cell, or none
-                both = place.relation == 'both'
-                said = (f'{said_side(place.offset, both)} a {place.landmark.name} and '
-                        f'{said_side(place.other_offset, both)} a {place.other.name}')
-                n = len(met) or 'no'
-                reason = None if len(met) == 1 else f'ambiguous: {n} cells are {said}'
-                return Composed(met[:1] if len(met) == 1 else [], pa * pb, reason, wa + wb)
-        if reason is None and place.landmark == place.other:  # "between the two chairs"
-            n, name, b = len(a), place.landmark.name, a  # two of the same landmarks
-            if n < 2 or n > 2 and place.on is None:  # ("the house between two trees": any)
-                reason = f'ambiguous: {n} {name}{"s" * (n != 1)} on the map, not two to be between'
-        if reason is None:
-            on = None if place.on is None else kinds.get(place.on)
-            a, b, reason = closest_pair(a, b, grid, on, (place.landmark.name, place.other.name))
-        if reason is None:
-            cell, reason = midpoint(a, b, (place.landmark.name, place.other.name), cell_size)
-        if cell is not None and not (on_side(cell, a, place.offset)
-                                     and on_side(cell, b, place.other_offset)):
-            cell, reason = None, (f'ambiguous: no cell is {said_side(place.offset)} the '
-                                  f'{place.landmark.name} and {said_side(place.other_offset)} '
-                                  f'the {place.other.name}')
+        cell, reason = (None, ra or rb) if ra or rb else between(place, a, b, grid, kinds,
+                                                                 cell_size)
         return Composed([] if cell is None else [(cell, 1.0)], pa * pb, reason, wa + wb)
     if place.relation == 'row-col':  # past the learned counts: one's row, the other's column
         (a, pa, wa, ra), (b, pb, wb, rb) = locate(place.landmark), locate(place.other)
@@ -345,6 +321,43 @@ def by_distance(d, name: str, anchor: str, pick: str):
     return int(np.flatnonzero(np.isclose(d, best))[0]), None
 
 
+def between(place: Place, a: list, b: list, grid: np.ndarray, kinds: dict, cell_size=None):
+    """
+    Return (the cell of a between or a both place, None), or (None, why not).
+
+    `a`, `b`: the landmarks each may be (Locator.candidates). Said by sides ("below the tree and
+    above the horse"), the one cell at those sides of both, else (not for counts) the midpoint
+    if it lies on both sides; of two of a kind ("between the two chairs"), the map's two.
+    """
+    names = (place.landmark.name, place.other.name)
+    said = None
+    if place.offset != (0, 0):
+        counted = place.relation == 'both'
+        said = (f'{side_words(place.offset, counted)} a {names[0]} and '
+                f'{side_words(place.other_offset, counted)} a {names[1]}')
+        met = meeting(a, place.offset, b, place.other_offset, grid)
+        if len(met) == 1:
+            return met[0], None
+        if met:
+            return None, f'ambiguous: {len(met)} cells are {said}'
+        if counted:
+            return None, f'ambiguous: no cell is {said}'
+    if place.landmark == place.other:  # two of the same landmarks
+        n, b = len(a), a
+        if n < 2 or n > 2 and place.on is None:  # ("the house between two trees": any two)
+            return None, f'ambiguous: {n} {names[0]}{"s" * (n != 1)} on the map, not two'
+    on = None if place.on is None else kinds.get(place.on)
+    a, b, reason = closest_pair(a, b, grid, on, names)
+    if reason is not None:
+        return None, reason
+    cell, reason = midpoint(a, b, names, cell_size)
+    if cell is not None and said and not (
+        on_side(cell, a, place.offset) and on_side(cell, b, place.other_offset)
+    ):
+        return None, f'ambiguous: no cell is {said}'
+    return cell, reason
+
+
 def closest_pair(a: list, b: list, grid: np.ndarray, on: int | None, names: tuple[str, str]):
     """
     Return (a landmark of each, None) for a between, or (None, None, why not).
@@ -381,19 +394,11 @@ def on_side(cell: tuple[int, int], landmark: np.ndarray, side: tuple[int, int]) 
 
 
 def meeting(a: list, side_a, b: list, side_b, grid: np.ndarray) -> list:
-    """Return [(cell, 1.0)] for each cell at `side_a` from an `a` and at `side_b` from a `b`."""
+    """Return the cells at `side_a` from a landmark of `a` and at `side_b` from one of `b`."""
     def steps(found, offset):
         return {(int(r) + offset[0], int(c) + offset[1]) for x in found for r, c in x
                 if on_side((r + offset[0], c + offset[1]), x, offset)}
-    cells = steps(a, side_a) & steps(b, side_b)
-    return [(c, 1.0) for c in sorted(cells) if inside(grid, c)]
-
-
-def said_side(offset: tuple[int, int], counted: bool = False) -> str:
-    """Return an offset along one axis in words: (0, -1) is 'left of' (counted: '1 left of')."""
-    n = max(map(abs, offset))
-    side = {(-1, 0): 'above', (1, 0): 'below', (0, -1): 'left of', (0, 1): 'right of'}
-    return (f'{n} ' if counted or n > 1 else '') + side[(offset[0] // n, offset[1] // n)]
+    return [c for c in sorted(steps(a, side_a) & steps(b, side_b)) if inside(grid, c)]
 
 
 def midpoint(a: np.ndarray, b: np.ndarray, names: tuple[str, str], cell_size=None):

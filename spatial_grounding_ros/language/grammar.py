@@ -142,6 +142,8 @@ def parse_offset(words: list[str]) -> tuple[int, int] | None:
 # the robot, or the one who speaks to it (where the robot is, as for "bring me"), in "the
 # chair nearest to me"
 SPOKEN_TO = frozenset('me us you yourself robot'.split())
+# "between the two chairs", "both chairs": two of a kind
+PAIR_WORDS = frozenset('two 2 both'.split())
 # said after a landmark's name, of another ("the chair near the sofa"): the one nearest it
 NEAR_AFTER = (['near'], ['by'], ['beside'], ['next'], ['close'], ['closer'], ['nearer'])
 # skipped in a landmark's words: "the heart that's left of the horse"
@@ -349,8 +351,8 @@ def _between(words: list[str], names: dict[str, str], on: str | None) -> Place |
     rest = words[k + 1:]
     if lead not in ([], *([w] for w in HALFWAY_WORDS), ['middle']):
         return None
-    two = set(rest) & {'two', '2', 'both'}  # said: "between horse" is no pair of horses
-    if two and [w for w in rest if w not in ('the', 'two', '2', 'both')] in ([w] for w in names):
+    two = set(rest) & PAIR_WORDS  # said: "between horse" is no pair of horses
+    if two and [w for w in rest if w not in PAIR_WORDS | {'the'}] in ([w] for w in names):
         kind = Landmark(names[rest[-1]])  # "between the two chairs": two of a kind
         return Place('between', kind, other=kind, on=on)
     if 'and' not in rest:

@@ -285,13 +285,20 @@ def landmark_words(landmark: Landmark, style: int = 0) -> str:
     raise ValueError(f'unknown pick {landmark.pick!r}')
 
 
+def side_words(offset: tuple[int, int], counted: bool = True) -> str:
+    """Return an offset along one axis, before a landmark: 'two to the left of'."""
+    dr, dc = offset
+    n, step = max(abs(dr), abs(dc)), (dr and dr // abs(dr), dc and dc // abs(dc))
+    return f'{_count(n)} {_STRAIGHT_SIDE[step]}' if counted or n > 1 else _STRAIGHT_SIDE[step]
+
+
 def _offset_words(offset: tuple[int, int], style: int) -> str:
     """People's words for an offset, before "of the <landmark>" (diagonal, compound, long)."""
     dr, dc = offset
     if 0 in offset:  # along one axis
         n, step = max(abs(dr), abs(dc)), (dr and dr // abs(dr), dc and dc // abs(dc))
         return [f'{_cells(n)} {_COMPASS[step]} of', f'{n} squares {_STRAIGHT_SIDE[step]}',
-                f'{_count(n)} {_STRAIGHT_SIDE[step]}'][style % 3]
+                side_words(offset)][style % 3]
     v, h = (dr // abs(dr), 0), (0, dc // abs(dc))
     if abs(dr) == abs(dc):  # a diagonal
         n = abs(dr)
