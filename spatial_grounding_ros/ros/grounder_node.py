@@ -392,7 +392,8 @@ class GrounderNode(LifecycleNode):
         """Ground the held instruction: a small map's here, if the model is free (taken first)."""
         small = self.grid is not None and self.grid.size <= INLINE_CELLS
         if not (small and self.topic_grounding.idle() and self.model_lock.acquire(blocking=False)):
-            return self.topic_grounding.wake()  # it takes the held instruction once it is free
+            self.topic_grounding.wake()  # it takes the held instruction once it is free
+            return
         try:  # taken before: no service request takes the model between the check and this
             self.ground_held()
         finally:
