@@ -318,7 +318,7 @@ def test_large_maps_gather_offset_by_offset_as_training_gathers_them_all(shape):
 @pytest.mark.parametrize('shape', [(1, 1), (1, 17), (3, 4), (10, 10), (13, 29), (32, 32)])
 def test_traced_head_is_the_head(shape, views, monkeypatch):
     """A small map's head runs as a trace at inference: bit for bit the head as written."""
-    from spatial_grounding_ros.models import head as heads
+    from spatial_grounding_ros.models import head as heads, traces
 
     head = random_model('t-rnet-attn', 5, seed=16, **views).head
     for b in (1, 3):  # one map, and a map with its mirror images
@@ -330,13 +330,13 @@ def test_traced_head_is_the_head(shape, views, monkeypatch):
             written = head(z1, code, far)
             monkeypatch.undo()
         assert torch.equal(traced, written), b
-    assert len(heads._TRACES[head]) == 2  # one per shape
+    assert traces.traces_of(head) == 2  # one per shape
 
 
 def test_a_traced_head_follows_its_own_weights_only():
     """Trained in place, a head's trace follows; a copy's trace never reads the original's."""
     import copy
-    from spatial_grounding_ros.models import head as heads
+    from spatial_grounding_ros.models import traces
 
     head = random_model('t-rnet-attn', 5, seed=17, axial=True, head_text=True, far=True).head
     z1, code, far = torch.randn(1, 10, 10), torch.randn(1, head.code_size), torch.randn(1, 10, 10)
@@ -349,6 +349,39 @@ def test_a_traced_head_follows_its_own_weights_only():
         assert not torch.equal(changed, before)
         head.convs[0].weight.mul_(2)
         assert torch.equal(head(z1, code, far), changed)
-        for size in range(2, 4 + heads.TRACES_KEPT):
-            head(torch.randn(1, size, size), code, torch.randn(1, size, size))
-    assert len(heads._TRACES[head]) == heads.TRACES_KEPT
+        for size in range(2, 4 + traces.TRACES_KEPT):  # the oldest traces go
+            head(torch.randn(1, 1, size), code, torch.randn(1, 1, size))
+    assert traces.traces_of(head) == traces.TRACES_KEPT
+
+
+@pytest.mark.parametrize('name, views', [
+    ('t-rnet-attn', {'axial': True, 'head_text': True, 'far': True, 'skip_unknown': True}),
+    ('t-rnet-attn', {}),
+    ('t-rnet', {'far': True}),
+])
+def test_traced_text_code_is_the_text_code(name, views):
+    """A grounder's text code (all kinds, no gradients) runs as a trace: bit for bit."""
+    from spatial_grounding_ros.models import traces
+
+    model = random_model(name, 9, seed=18, **views)
+    codes = 0
+    # t-RNetAttn also as its warm-up epochs run it, without attention
+    for attention in {model.capabilities.relation_attention, False}:
+        model.attention_on = attention
+        for length in (1, 3, 7):
+            for b in (1, 4):  # one wording, and a map's with its mirror images
+                seeded = torch.Generator().manual_seed(length)
+                tokens = torch.randint(0, 9, (b, length), generator=seeded)  # pads, unknowns
+                with torch.inference_mode():
+                    traced = model.text_code(tokens)
+                    written = model.compute_text_code(tokens)
+                codes += 1
+                for field in ('kinds', 'relations', 'attention', 'head', 'far'):
+                    a, w = getattr(traced, field), getattr(written, field)
+                    assert (a is None) == (w is None), field
+                    assert a is None or torch.equal(a, w), field
+    assert traces.traces_of(model) == codes  # one per shape (and attention switch)
+    # with gradients (training) and per map's kinds (a batch's forward): as written
+    tokens = torch.randint(0, 9, (2, 5))
+    assert model.text_code(tokens).relations.requires_grad
+    assert traces.traces_of(model) == codes

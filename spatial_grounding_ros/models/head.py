@@ -8,16 +8,14 @@
 
 from __future__ import annotations
 
-import collections
 import functools
-import warnings
-import weakref
 
 import torch
 from torch import nn
 import torch.nn.functional as F
 
 from .config import head_code_size, ModelConfig
+from .traces import traced
 
 
 def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool):
@@ -25,13 +23,9 @@ def outputs(values: torch.Tensor, z1: torch.Tensor, attention, return_aux: bool)
     return (values, {'relation_map': z1, 'attention': attention}) if return_aux else values
 
 
-# One map of up to this many cells at inference runs a trace of the head (OutputHead.traced):
+# One map of up to this many cells at inference runs a trace of the head (models.traces):
 # there its time is mostly Python around some 60 small tensor ops (0.53 -> 0.35 ms at 10x10)
 TRACED_CELLS = 32 * 32
-# each head's traces by input shape, at most TRACES_KEPT; kept outside the module so that a
-# copy of a head (copy.deepcopy: rl.py's target network) never runs on the original's weights
-TRACES_KEPT = 8
-_TRACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 @functools.lru_cache(maxsize=16)
@@ -130,32 +124,14 @@ class OutputHead(nn.Module):
 
     def traced(self, z1: torch.Tensor, code: torch.Tensor, far: torch.Tensor | None):
         """
-        Run forward as a TorchScript trace of it for these inputs' shapes, made on first use.
+        Run forward as a trace of it for these inputs' shapes (models.traces.traced).
 
-        A trace is the same tensor ops on the module's own parameters (trained in place, as
-        an optimizer does, it follows them), recorded for one shape: the map's size fixes
-        the gradient maps and each choice forward makes (layout, tiles, views), so each shape
-        has its own. Only without gradients: training runs forward itself.
+        The map's size fixes the gradient maps and each choice forward makes (layout, tiles,
+        views). Only without gradients: training runs forward itself.
         """
-        traces = _TRACES.setdefault(self, collections.OrderedDict())
-        inputs = (z1, code) if far is None else (z1, code, far)
-        key = tuple((x.shape, x.dtype, x.device) for x in inputs)
-        trace = traces.pop(key, None)
-        if trace is None:
-            # made before, the gradient maps are a constant of the trace, not ops of it
-            gradient_maps(*z1.shape[1:], z1.device, self.gradient_cells)
-            with warnings.catch_warnings():
-                # its Python choices are the shape's, as meant. torch calls tracing deprecated
-                # for torch.export and torch.compile: an exported head ran slower than this
-                # one (0.8 ms at 10x10), and compiling needs a C++ toolchain and seconds at
-                # run time; the pinned torch traces
-                warnings.simplefilter('ignore', torch.jit.TracerWarning)
-                warnings.simplefilter('ignore', DeprecationWarning)
-                trace = torch.jit.trace(self, inputs, check_trace=False)
-            if len(traces) >= TRACES_KEPT:
-                traces.popitem(last=False)
-        traces[key] = trace
-        return trace(*inputs)
+        # made before, the gradient maps are a constant of a trace, not ops of it
+        gradient_maps(*z1.shape[1:], z1.device, self.gradient_cells)
+        return traced(self, lambda: self, (z1, code) if far is None else (z1, code, far))
 
     def tiled(
         self,

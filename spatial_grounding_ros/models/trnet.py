@@ -26,6 +26,7 @@ from .far import FAR_LOG_COST, far_map, FAR_POSITION
 from .head import build_head, outputs
 from .protocol import Capabilities, EntityRows, RelationCode
 from .relation import cell_pairs, kind_table, pair_relations
+from .traces import traced
 
 # a map of more cells than this is grounded (without gradients) one neighbour offset at a time:
 # on small maps one gather of all offsets costs fewer calls
@@ -156,6 +157,27 @@ class TRNet(EntityRows, nn.Module):
 
     def text_code(self, tokens: torch.Tensor, kinds: torch.Tensor | None = None) -> RelationCode:
         """
+        All that an instruction contributes, for maps of any size (compute_text_code).
+
+        Over all kinds at inference (a grounder's, once per instruction) it runs as a trace
+        per sentence length (models.traces): bit for bit the same, 0.7 -> 0.4 ms.
+        """
+        if kinds is not None or torch.is_grad_enabled() or torch.jit.is_tracing():
+            return self.compute_text_code(tokens, kinds)
+        code = traced(self, lambda: TracedTextCode(self), (tokens,), key=(self.attention_on,))
+        kinds, relations, attention, head, far = code
+        return RelationCode(
+            kinds=kinds,
+            relations=relations,
+            attention=attention if self.attention_on else None,
+            head=head,
+            far=far if self.cfg.far else None,
+        )
+
+    def compute_text_code(
+        self, tokens: torch.Tensor, kinds: torch.Tensor | None = None
+    ) -> RelationCode:
+        """
         All that an instruction contributes, for maps of any size.
 
         The relation table r over (kind_i, kind_j, offset) as (B, Ki * Kj, 8), row
@@ -240,6 +262,19 @@ class TRNet(EntityRows, nn.Module):
                 :, 0
             ] / (p * h * w)
         return outputs(values, z1, word_attention, return_aux)
+
+
+class TracedTextCode(nn.Module):
+    """A TRNet's text code over all kinds as a trace records it: tensors only (empty for None)."""
+
+    def __init__(self, model: TRNet):
+        super().__init__()
+        self.model = model
+
+    def forward(self, tokens: torch.Tensor) -> tuple:
+        code = self.model.compute_text_code(tokens)
+        fields = (code.kinds, code.relations, code.attention, code.head, code.far)
+        return tuple(tokens.new_zeros(0) if x is None else x for x in fields)
 
 
 def pair_counts(pairs: list[torch.Tensor], n_rows: int) -> torch.Tensor:
