@@ -455,3 +455,62 @@ def test_a_failing_model_is_an_error_diagnostic_and_the_node_keeps_running(nodes
     assert not grounder.hold.pending
     wait_held(nodes, probe.publish_map(WORLDS.grids[1]))
     good_request(nodes, reference, world=1)
+
+
+def test_a_late_subscriber_gets_the_latest_value_maps(ros_context, checkpoint, reference):
+    """
+    value_map and value_map_raw are latched: built on demand, yet a late subscriber has them.
+
+    With no one subscribed the grounder keeps a grounding's maps unbuilt (LatchedOutput); a
+    subscriber that comes later gets the latest grounding's, one that is there gets each.
+    """
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import OccupancyGrid
+    from rclpy.node import Node
+    from spatial_grounding_ros.ros.qos import LATCHED
+    from std_msgs.msg import Float32MultiArray, String
+
+    graph, namespace = ros_context, unique_namespace('late_subscriber_test')
+    overrides = [Parameter('checkpoint', value=str(checkpoint)), PUDDLEWORLD_TABLE, ANY_CONFIDENCE]
+    grounder = graph.add(
+        GrounderNode(context=graph.context, namespace=namespace, parameter_overrides=overrides)
+    )
+    client = graph.add(Node('late_client', namespace=namespace, context=graph.context))
+    goals = []
+    goal_sub = client.create_subscription(PoseStamped, 'goal_pose', goals.append, 10)
+    map_pub = client.create_publisher(OccupancyGrid, 'entity_map', LATCHED)
+    instruction_pub = client.create_publisher(String, 'instruction', 10)
+    assert graph.wait_for(lambda: instruction_pub.get_subscription_count() > 0
+                          and goal_sub.get_publisher_count() > 0)
+    grid = WORLDS.grids[1]
+    map_pub.publish(convert.grid_to_occupancy_grid(grid, Header(frame_id='map')))
+    assert graph.wait_for(lambda: grounder.grid is not None)
+
+    def ground(world: int) -> np.ndarray:
+        count = len(goals)
+        instruction_pub.publish(String(data=WORLDS.instructions[world]))
+        assert graph.wait_for(lambda: len(goals) > count), 'no goal'
+        return reference.ground(grid, WORLDS.instructions[world]).values
+
+    def subscribe() -> tuple[Node, list, list]:
+        node = Node('late_subscriber', namespace=namespace, context=graph.context)
+        raws, maps = [], []
+        node.create_subscription(Float32MultiArray, 'value_map_raw', raws.append, LATCHED)
+        node.create_subscription(OccupancyGrid, 'value_map', maps.append, LATCHED)
+        return graph.add(node), raws, maps
+
+    ground(0)
+    expected = ground(2)  # the latest, nobody subscribed to its maps
+    late, raws, maps = subscribe()
+    assert graph.wait_for(lambda: raws and maps), 'a late subscriber got no value map'
+    np.testing.assert_allclose(raw_values(raws[-1]), expected, rtol=1e-6, atol=1e-6)
+    assert (maps[-1].info.width, maps[-1].info.height) == (grid.shape[1], grid.shape[0])
+    expected = ground(3)  # subscribed: at once
+    assert graph.wait_for(lambda: len(raws) == 2 and len(maps) == 2)
+    np.testing.assert_allclose(raw_values(raws[-1]), expected, rtol=1e-6, atol=1e-6)
+    graph.executor.remove_node(late)
+    late.destroy_node()
+    expected = ground(0)
+    _, raws, _ = subscribe()  # a second late subscriber: the latest again
+    assert graph.wait_for(lambda: raws), 'a second late subscriber got no value map'
+    np.testing.assert_allclose(raw_values(raws[-1]), expected, rtol=1e-6, atol=1e-6)

@@ -38,6 +38,14 @@ class Dropped:
     text: str
     why: str  # 'superseded', 'expired', 'inactive', 'rejected'
 
+    def message(self, timeout: float) -> str:
+        """Say why it went: expired (after `timeout` s with no map), else superseded."""
+        if self.why == 'expired':
+            return (f'instruction {self.text!r} expired: no valid entity_map within '
+                    f'instruction_timeout={timeout:g} s; dropped, send it again')
+        return (f'instruction {self.text!r} dropped: a newer instruction came before it was '
+                'grounded')
+
 
 class InstructionHold:
     """The latest valid instruction, whether it still waits to be grounded, and since when."""

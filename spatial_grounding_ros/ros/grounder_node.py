@@ -14,11 +14,11 @@ cleanup releases all. `autostart` (the default) configures and activates at star
 
 While active it holds the latest valid entity_map and instruction (core/instruction_hold.py has
 the rules) and grounds when both are there, publishing goal_pose (none on a decline, a stop or a
-question), goal_path (a sequence's goals; empty for a stop), value_map, value_map_raw,
-value_map_image, relation_map and a diagnostic naming the intent; the node's state is on
-/diagnostics every second. Bad input gets a warning, a WARN diagnostic, no goal, and the node
-keeps running. The service ground_instruction answers one instruction without publishing, or
-refuses it at once as `busy` when max_pending_requests are in flight.
+question), goal_path (a sequence's goals; empty for a stop), the latched value_map(_raw, _image)
+and relation_map (each built once someone subscribes: LatchedOutput) and a diagnostic naming the
+intent; its state is on /diagnostics every second. Bad input gets a warning, a WARN diagnostic,
+no goal, and the node keeps serving. The service ground_instruction answers one instruction
+without publishing, or refuses it at once as `busy` when max_pending_requests are in flight.
 
 Threads: inputs, status, lifecycle and topic groundings on maps of up to INLINE_CELLS cells run
 in the spinning thread (spin()'s ServingExecutor); larger maps' on a thread the inputs wake;
@@ -48,6 +48,7 @@ from . import convert
 from .executors import Worker
 from .ground_service import grounding_report, intent, Poser, refuse, response
 from .grounder_parameters import PARAMETERS
+from .latched_output import LatchedOutput
 from .node_support import (
     autostart,
     declare_parameters,
@@ -166,18 +167,14 @@ class GrounderNode(LifecycleNode):
         publisher = self.create_lifecycle_publisher
         self.goal_pub = publisher(PoseStamped, topics.GOAL_POSE, 10)
         self.path_pub = publisher(Path, topics.GOAL_PATH, 10)
-        self.value_map_pub = publisher(OccupancyGrid, topics.VALUE_MAP, LATCHED)
-        self.value_raw_pub = publisher(Float32MultiArray, topics.VALUE_MAP_RAW, LATCHED)
-        self.value_image_pub = publisher(Image, topics.VALUE_MAP_IMAGE, LATCHED)
-        self.relation_map_pub = publisher(OccupancyGrid, topics.RELATION_MAP, LATCHED)
+        latched = ((OccupancyGrid, topics.VALUE_MAP), (Float32MultiArray, topics.VALUE_MAP_RAW),
+                   (Image, topics.VALUE_MAP_IMAGE), (OccupancyGrid, topics.RELATION_MAP))
+        self.latched = {topic: LatchedOutput(self, kind, topic) for kind, topic in latched}
         subscription = self.create_subscription
         self.topics = [
             self.goal_pub,
             self.path_pub,
-            self.value_map_pub,
-            self.value_raw_pub,
-            self.value_image_pub,
-            self.relation_map_pub,
+            *(output.publisher for output in self.latched.values()),
             subscription(OccupancyGrid, topics.ENTITY_MAP, self.on_entity_map, LATCHED),
             subscription(String, topics.INSTRUCTION, self.on_instruction, BURST),
             subscription(PoseStamped, topics.ROBOT_POSE, self.on_robot_pose, 10),
@@ -344,16 +341,9 @@ class GrounderNode(LifecycleNode):
 
     def report_dropped(self, dropped: Dropped | None) -> None:
         """Say that an instruction was let go of without a grounding (expired, superseded)."""
-        if dropped is None:
-            return
-        if dropped.why == 'expired':
-            message = (f'instruction {dropped.text!r} expired: no valid entity_map within '
-                       f'instruction_timeout={self.param("instruction_timeout"):g} s; dropped, '
-                       'send it again')
-        else:
-            message = (f'instruction {dropped.text!r} dropped: a newer instruction came before '
-                       'it was grounded')
-        self.report('instruction', DiagnosticStatus.WARN, message, dropped=dropped.text)
+        if dropped is not None:
+            message = dropped.message(self.param('instruction_timeout'))
+            self.report('instruction', DiagnosticStatus.WARN, message, dropped=dropped.text)
 
     @guarded('robot_pose')
     def on_robot_pose(self, msg: PoseStamped) -> None:
@@ -430,22 +420,28 @@ class GrounderNode(LifecycleNode):
         goal = poser.goal(result) if result.reason is None else None
         if goal is not None:
             self.goal_pub.publish(goal)
-        if goal is not None or intent(result) == 'stop':
+        # a volatile topic with no subscriber would drop the message: it is not built
+        path_wanted = self.path_pub.get_subscription_count() > 0
+        if path_wanted and (goal is not None or intent(result) == 'stop'):
             self.path_pub.publish(poser.path(result))  # a stop's is empty
-        if result.values is not None and np.size(result.values):
-            self.value_map_pub.publish(
-                convert.value_map_to_occupancy_grid(
-                    result.values, header, info, self.param('value_map_encoding')
-                )
-            )
-            self.value_raw_pub.publish(convert.value_map_to_float32_multiarray(result.values))
-            self.value_image_pub.publish(convert.value_map_to_image(result.values, header))
-        if result.relation_map is not None and np.size(result.relation_map):
-            self.relation_map_pub.publish(
-                convert.magnitude_to_occupancy_grid(result.relation_map, header, info)
-            )
+        self.offer_maps(result.values, result.relation_map, header, info)
         level, message, values = grounding_report(result)
         self.report('grounding', level, message, **values)
+
+    def offer_maps(self, values, relation, header: Header, info) -> None:
+        """Offer the latched value maps and relation map, each built once someone subscribes."""
+        out, encoding = self.latched, self.param('value_map_encoding')
+        if values is not None and np.size(values):
+            out[topics.VALUE_MAP].offer(
+                lambda: convert.value_map_to_occupancy_grid(values, header, info, encoding)
+            )
+            raw, image = convert.value_map_to_float32_multiarray, convert.value_map_to_image
+            out[topics.VALUE_MAP_RAW].offer(lambda: raw(values))
+            out[topics.VALUE_MAP_IMAGE].offer(lambda: image(values, header))
+        if relation is not None and np.size(relation):
+            out[topics.RELATION_MAP].offer(
+                lambda: convert.magnitude_to_occupancy_grid(relation, header, info)
+            )
 
     def on_ground_request(self, request, reply):
         """Answer GroundInstruction at once when max_pending_requests are in flight: busy."""

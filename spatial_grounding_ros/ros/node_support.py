@@ -210,6 +210,8 @@ def report(
         node.get_logger().warning(message)
     else:
         node.get_logger().error(message)
+    if not publisher.get_subscription_count():  # volatile: no one would get it, so not built
+        return
     status = DiagnosticStatus(
         level=level,
         name=f'{node.get_fully_qualified_name()}: {part}',
