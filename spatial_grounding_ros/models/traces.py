@@ -30,11 +30,11 @@ TRACES_KEPT = 32
 _TRACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def traced(owner: nn.Module, module: Callable[[], nn.Module], inputs: tuple, key: tuple = ()):
+def traced(owner: nn.Module, make: Callable[[], nn.Module], inputs: tuple, key: tuple = ()):
     """
-    Return `module()(*inputs)`, run as `owner`'s trace of it for these inputs' shapes and `key`.
+    Return `make()(*inputs)`, run as `owner`'s trace of it for these inputs' shapes and `key`.
 
-    A trace is recorded on first use (some 25 ms) from the module that `module` makes (owner
+    A trace is recorded on first use (some 25 ms) from the module that `make` returns (owner
     itself, or a wrapper of it whose outputs are tensors); `key` holds whatever else fixes its
     Python choices. It
     runs without the JIT's optimising passes: those profile the first runs and re-run them
@@ -52,7 +52,7 @@ def traced(owner: nn.Module, module: Callable[[], nn.Module], inputs: tuple, key
             # time; the pinned torch traces
             warnings.simplefilter('ignore', torch.jit.TracerWarning)
             warnings.simplefilter('ignore', DeprecationWarning)
-            trace = torch.jit.trace(module(), inputs, check_trace=False)
+            trace = torch.jit.trace(make(), inputs, check_trace=False)
         if len(traces) >= TRACES_KEPT:
             traces.popitem(last=False)
     traces[key] = trace
