@@ -97,8 +97,13 @@ def test_bench_writes_every_section(tmp_path):
     assert 'an echo node in place of the grounder' in bench.table(result)
     memory = result['memory']
     assert memory['rss_mb_after_110'] > 0 and 'Grounder.ground()' in memory['measured']
+    # the largest map's peak in a process that grounds only it (the memory target's, at 1024)
+    own = result['fresh_process']
+    assert own['map'] == '16x16' and 0 < own['rss_mb_before'] <= own['peak_rss_mb']
+    assert len(own['ground_ms']) == own['groundings'] and min(own['ground_ms']) > 0
     assert set(result['checks']) == set(bench.TARGETS)
     assert result['checks']['ground_over_yardstick_128x128']['met'] is None  # not measured
+    assert result['checks']['peak_rss_1024x1024_mb']['met'] is None
     # the markdown table beside the JSON is the JSON's table
     assert out.with_suffix('.md').read_text() == bench.table(result)
     assert '| 16x16 | 4 |' in bench.table(result)
