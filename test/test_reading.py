@@ -433,6 +433,7 @@ def test_a_placing_goes_where_the_thing_is_put(puddleworld, text, goal):
         ('set the bag down next to the desk', [beside((5, 9))]),
         ('take the cup from the desk and put it in the fridge', [beside((5, 9)), beside((3, 3))]),
         ('go to the sofa and set it down', [beside((8, 6))]),  # on arrival: no place
+        ('place the box around the fridge', [beside((3, 3))]),  # a place the grammar lacks
     ],
 )
 def test_a_placing_in_a_request_or_after_a_fetch(office, text, goals):
@@ -441,10 +442,28 @@ def test_a_placing_in_a_request_or_after_a_fetch(office, text, goals):
     assert len(steps) == len(goals) and all(map(lands, steps, goals)), (text, result.reason)
 
 
-@pytest.mark.parametrize('text', ['put the cup down', 'please put it down', 'drop it off'])
+@pytest.mark.parametrize(
+    'text',
+    ['put the cup down', 'please put it down', 'drop it off', 'leave the sofa',
+     'put the chair down', 'leave the fridge'],  # a landmark left or put down: still no place
+)
 def test_a_placing_that_says_no_place_declines(office, text):
     result = office.ground(office_map(office), text)
-    assert result.goal is None and result.reason.endswith('says no place')
+    assert result.goal is None and result.reason.endswith('says no place'), result.reason
+
+
+@pytest.mark.parametrize(
+    'text, goal',
+    [
+        ('leave the sofa and go to the fridge', beside((3, 3))),
+        ('put the chair down and go to the fridge', beside((3, 3))),  # not "2 chairs"
+        ('put the cup down then go to the sofa', beside((8, 6))),  # "down" is no direction
+        ('drop the box, then head to the desk', beside((5, 9))),
+    ],
+)
+def test_a_placing_with_no_place_before_a_step_is_done_where_the_robot_is(office, text, goal):
+    result = office.ground(office_map(office), text, robot_cell=(10, 10))
+    assert result.intent == 'go' and lands(result, goal), (text, result.goal, result.reason)
 
 
 @pytest.mark.parametrize(

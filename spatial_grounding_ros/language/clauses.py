@@ -252,7 +252,8 @@ def placed(words: list[str], mentions, reads=None) -> list[str] | None:
     "put the cup on the table", "place the object under the rock", "set it down below the
     horse": the robot takes the thing there, whatever it is called ("cup" is no typo of
     "up" there), so the place after it is where to go; "in the fridge" and "on the table" are
-    the landmark's own place. A placing that says no place ("put the cup down") is None;
+    the landmark's own place. A placing that says no place ("put the cup down", "leave the
+    sofa": the landmark is the thing) is None;
     one whose place `reads` (words -> its Reference) has no Place goes to the network in the
     words it learned one in ("place the object under ..."). Other words stay as they are.
     """
@@ -270,7 +271,11 @@ def placed(words: list[str], mentions, reads=None) -> list[str] | None:
 
     start = next((k for k in range(1, len(kept)) if opens(k)), None)
     if start is None:
-        return None
+        found = mentions(kept)
+        # "put it down", "leave the sofa": no landmark but the thing itself, so no place
+        if not found or all(w in ARTICLES for w in kept[1:found[0].start]):
+            return None
+        return words  # "place the box around the tree": the network reads a place it said
     # "set it down below the horse": the verb's particle, then the place
     if kept[start] in PLACING_PARTICLES and start + 1 < len(kept) and opens(start + 1) and (
         kept[start + 1] not in NUMBERS

@@ -309,15 +309,13 @@ class Reader:
         if negation is not None:  # "don't go to the fridge, go to the sofa": the sofa
             kept = beside_negation(words, negation, self.lexicon.mentions)
             if kept is None:
-                return Command(
-                    text, 'negation', (), f'negation: "{negation}" says where not to go', notes
-                )
+                why = f'negation: "{negation}" says where not to go'
+                return Command(text, 'negation', (), why, notes)
             words, mentions, notes = kept, self.lexicon.mentions(kept), (*notes, 'negation')
         words, brought = fetched(words, self.lexicon.mentions)  # "get a soda from the fridge"
         if not mentions and placed(words, self.lexicon.mentions) is None:  # "put it down"
             return Command(text, 'unsupported', (), f'unsupported: "{text}" says no place', notes)
         words, back = without_return(words, self.lexicon.mentions)  # "and come back"
-        back = back or brought
         words, action = without_action(words, self.lexicon.mentions)  # "and sit down"
         notes += ('action',) if action else ()
         content = [w for w in words if w not in FILLERS]
@@ -353,11 +351,14 @@ class Reader:
             ref = self.reference(words, cell_size)
             return Command(text, 'go', (replace(ref, reason='ambiguous: one place or another '
                                         'is named: say which'),), None, notes)
-        # "put the cup on the desk", "... and put it on the desk": a go to the place it reads
+        # "put the cup on the desk": a go to the place it reads ("... and put it on the desk")
         reads = functools.partial(self.reference, cell_size=cell_size)
-        steps = [placed(s, self.lexicon.mentions, reads) or s
+        steps = [placed(s, self.lexicon.mentions, reads)
                  for s in split_steps(words, self.lexicon.mentions)]
-        refs = tuple(self.reference(s, cell_size) for s in steps) + (RETURN_STEP,) * back
+        if None in steps:  # "leave the sofa", "put the chair down": a placing, no place said
+            return Command(text, 'unsupported', (), f'unsupported: "{text}" says no place', notes)
+        back = (RETURN_STEP,) * (back or brought)
+        refs = tuple(self.reference(s, cell_size) for s in steps) + back
         return Command(text, 'sequence' if len(refs) > 1 else 'go', refs, None, notes)
 
     def reference(self, words: list[str], cell_size: float | None) -> Reference:

@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Callable
 
 from .checks import DIRECTIONS
-from .clauses import bare, listed, PLACING_VERBS
+from .clauses import bare, listed, placed, PLACING_VERBS
 from .phrases import find_phrase
 from .vocabulary import GO_VERBS, SEQUENCE_MARKS
 
@@ -52,6 +52,9 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
         cuts = [[w for w in c if w != 'and'] if c[-1:] == ['and'] else c for c in cuts if c]
         # "then the sofa and the lamp": a list of places within a step is that many steps
         cuts = [place for c in cuts for place in listed(c, mentions) or [c]]
+        cuts = on_the_way(cuts, mentions)
+        if len(cuts) == 1:
+            return cuts
         return said_of_it(cuts, mentions) or checked(cuts, words, mentions)
     for i, p in find_phrase(words, EARLIER_MARKS):
         if i > 0:  # "go to the sofa after the fridge": the fridge first
@@ -69,7 +72,9 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
             if w == 'and' and words[i + 1] in GO_VERBS | PLACING_VERBS]
     if ands:
         bounds = [0, *ands, len(words)]
-        cuts = [trimmed(words[a:b]) for a, b in zip(bounds, bounds[1:])]
+        cuts = on_the_way([trimmed(words[a:b]) for a, b in zip(bounds, bounds[1:])], mentions)
+        if len(cuts) == 1:
+            return cuts
         one = said_of_it(cuts, mentions)
         if one or checked(cuts, words, mentions) is cuts:
             return one or cuts
@@ -83,6 +88,17 @@ def steps(words: list[str], mentions: Callable[[list[str]], list]) -> list[list[
             said = [first, then] if opener == 'after' else [then, first]
             return checked([trimmed(c) for c in said], words, mentions)
     return [words]
+
+
+def on_the_way(cuts: list[list[str]], mentions) -> list[list[str]]:
+    """
+    Return the cuts but a placing or a leaving that says no place, when another remains.
+
+    "put the cup down, then go to the sofa", "leave the sofa and go to the fridge": it is
+    done where the robot is, no place to go to. Said alone, the reading declines it.
+    """
+    kept = [c for c in cuts if placed(c, mentions) is not None]
+    return kept or cuts
 
 
 def checked(cuts: list[list[str]], words: list[str], mentions) -> list[list[str]]:
