@@ -474,3 +474,17 @@ def generate(
 def family_of(world_id: str) -> str:
     """Return a generated example's family, from its world id `generated/<seed>/<family>/<i>`."""
     return world_id.split('/')[2]
+
+
+def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
+    """
+    Return a generated PuddleWorld-style `size` x `size` grid with one of its instructions.
+
+    Objects scale with the area, so large maps are not empty grass.
+    """
+    rng = np.random.default_rng(seed)
+    while True:
+        grid = random_grid(rng, size, n_nonunique=max(8, size * size // 12))
+        goals = global_goals(grid) or local_goals(grid)
+        if goals:
+            return grid, goals[0][0]

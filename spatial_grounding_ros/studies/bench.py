@@ -42,7 +42,7 @@ from .measure import (
     machine, peak_rss_mb, reset_peak_rss, timed, timed_together, yardstick
 )
 from .memory import in_own_process, memory_growth
-from ..data.generator import generate, global_goals, local_goals, random_grid
+from ..data.generator import generate, global_goals, local_goals, world_of_size
 from ..grounder import CACHED_INSTRUCTIONS, DEFAULT_CHECKPOINT, Grounder, IMAGES
 from ..language import grammar
 from ..models.config import ModelConfig
@@ -67,20 +67,6 @@ TARGETS = {
 REPEATED = 8
 # a ten-word instruction of the grammar people use, for the reading's time
 TEN_WORDS = 'two cells north-east of the second rock from the left'
-
-
-def world_of_size(size: int, seed: int = 0) -> tuple[np.ndarray, str]:
-    """
-    Return a generated PuddleWorld-style `size` x `size` grid with one of its instructions.
-
-    Objects scale with the area, so large maps are not empty grass.
-    """
-    rng = np.random.default_rng(seed)
-    while True:
-        grid = random_grid(rng, size, n_nonunique=max(8, size * size // 12))
-        goals = global_goals(grid) or local_goals(grid)
-        if goals:
-            return grid, goals[0][0]
 
 
 @torch.no_grad()

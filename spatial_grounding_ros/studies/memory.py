@@ -20,11 +20,13 @@ import subprocess
 import sys
 import time
 
+import torch
 from tqdm import tqdm
 
 from .measure import peak_rss_mb, reset_peak_rss, rss_mb
 from ..core.allocator import keep_freed_memory
-from ..data.generator import generate
+from ..data.generator import generate, world_of_size
+from ..grounder import Grounder
 
 GROUNDINGS = 3  # the first with a new instruction, then cached, as a node grounds a map again
 
@@ -51,11 +53,6 @@ def memory_growth(grounder, early: int, total: int) -> dict:
 
 def peak_memory(checkpoint: str, size: int) -> dict:
     """Ground a `size` x `size` bench map GROUNDINGS times; the process's RSS before and peak."""
-    import torch
-
-    from .bench import world_of_size
-    from ..grounder import Grounder
-
     keep_freed_memory()  # as the node and the bench set it
     torch.set_num_threads(1)
     grounder = Grounder.from_checkpoint(checkpoint)
