@@ -434,6 +434,9 @@ def test_a_placing_goes_where_the_thing_is_put(puddleworld, text, goal):
         ('take the cup from the desk and put it in the fridge', [beside((5, 9)), beside((3, 3))]),
         ('go to the sofa and set it down', [beside((8, 6))]),  # on arrival: no place
         ('place the box around the fridge', [beside((3, 3))]),  # a place the grammar lacks
+        ('put the left cup on the desk', [beside((5, 9))]),  # "left" is the cup's, no side
+        ('put the top book on the sofa', [beside((8, 6))]),
+        ('place the right box beside the sofa', [beside((8, 6))]),
     ],
 )
 def test_a_placing_in_a_request_or_after_a_fetch(office, text, goals):

@@ -265,6 +265,8 @@ def placed(words: list[str], mentions, reads=None) -> list[str] | None:
 
     def opens(k: int) -> bool:
         w, after = kept[k], kept[k + 1:k + 2]
+        if kept[k - 1] in ARTICLES:  # "put the left cup on the desk": the thing's own word
+            return False
         if w in NUMBERS:
             return bool(after) and (after[0] in UNIT_WORDS or after[0] in DIRECTIONS)
         return w in PLACE_OPENERS
