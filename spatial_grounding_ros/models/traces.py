@@ -36,10 +36,10 @@ def traced(owner: nn.Module, make: Callable[[], nn.Module], inputs: tuple, key: 
 
     A trace is recorded on first use (some 25 ms) from the module that `make` returns (owner
     itself, or a wrapper of it whose outputs are tensors); `key` holds whatever else fixes its
-    Python choices. It
-    runs without the JIT's optimising passes: those profile the first runs and re-run them
-    (some 10 ms more), and optimise nothing on these CPU graphs, so a trace is the ops as
-    recorded. It reads the module's own parameters, so an optimizer's in-place steps reach it.
+    Python choices. It runs without the JIT's optimising passes: those profile the first runs
+    and re-run them (some 10 ms more), and optimise nothing on these CPU graphs, so a trace is
+    the ops as recorded. It reads the module's own parameters, so an optimizer's in-place
+    steps reach it.
     """
     traces = _TRACES.setdefault(owner, collections.OrderedDict())
     key = (*key, *((x.shape, x.dtype, x.device) for x in inputs))
