@@ -456,6 +456,17 @@ def test_a_placing_that_says_no_place_declines(office, text):
 
 
 @pytest.mark.parametrize(
+    'text, landmark',
+    [('place the box under the rock', 'rock'), ('put the cup on the piano', 'piano'),
+     ('place the object under the rock', 'rock')],
+)
+def test_a_placing_to_a_landmark_not_in_the_table_names_the_landmark(office, text, landmark):
+    """The thing placed is no landmark: the decline names the place's ("rock"), not "box"."""
+    result = office.ground(office_map(office), text)
+    assert result.goal is None and result.reason == f'unknown-landmark: {landmark}'
+
+
+@pytest.mark.parametrize(
     'text, goal',
     [
         ('leave the sofa and go to the fridge', beside((3, 3))),

@@ -329,8 +329,8 @@ class Reader:
             # "follow the wall", "turn towards the door": a motion, not a place
             return Command(text, 'unsupported', (),
                            f'unsupported: "{motion[0][1]}" asks for a motion, not a place', notes)
-        if not mentions:
-            unknown = self.reference(words, cell_size)
+        if not mentions:  # a placing's thing is no landmark: its place may name one
+            unknown = self.reference(placed(words, self.lexicon.mentions) or words, cell_size)
             if unknown.reason is not None and unknown.reason.startswith('unknown-landmark'):
                 return Command(text, 'go', (unknown,), None, notes)
             found = find_phrase(content, UNSUPPORTED)
