@@ -39,8 +39,9 @@ def plot_grounding(
     """
     Three panels.
 
-    Map (entity names as letters), predicted values, |Z1|; marks the predicted goal (x), the true
-    goal (o) and an agent path if given.
+    Map (entity names as letters), predicted values, |Z1| (said to be none when all zero: a
+    goal the grammar placed); marks the predicted goal (x), the true goal (o) and an agent path
+    if given.
     """
     fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
     draw_map(axes[0], grid, entities)
@@ -48,7 +49,7 @@ def plot_grounding(
         fig,
         [
             (axes[1], values, 'value map', 'viridis'),
-            (axes[2], np.abs(relation_map), 'relation map |Z1|', 'magma'),
+            (axes[2], np.abs(relation_map), relation_title(relation_map), 'magma'),
         ],
     )
     for ax in axes:
@@ -58,6 +59,13 @@ def plot_grounding(
         mark_goals(ax, goal, true_goal, grid.shape)
     fig.suptitle(title)
     return save(fig, path)
+
+
+def relation_title(relation_map: np.ndarray) -> str:
+    """Title the |Z1| panel: a network's is never all zero, so none is the grammar's goal."""
+    if np.any(relation_map):
+        return 'relation map |Z1|'
+    return "relation map |Z1|: none\n(the grammar's goal: no network ran)"
 
 
 def draw_map(ax, grid: np.ndarray, entities: EntityTable) -> None:
