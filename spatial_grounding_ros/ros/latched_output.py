@@ -44,7 +44,8 @@ class LatchedOutput:
             self.publisher.publish(make())
 
     def matched(self, info: QoSPublisherMatchedInfo) -> None:
-        with self.lock:  # kept while inactive: activated, the node has it to give
+        # while inactive the maker stays: the node sends nothing then (a lifecycle publisher)
+        with self.lock:
             if info.current_count_change <= 0 or not self.publisher.is_activated:
                 return
             make, self.pending = self.pending, None

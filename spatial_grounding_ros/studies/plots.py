@@ -39,9 +39,8 @@ def plot_grounding(
     """
     Three panels.
 
-    Map (entity names as letters), predicted values, |Z1| (said to be none when all zero: a
-    goal the grammar placed); marks the predicted goal (x), the true goal (o) and an agent path
-    if given.
+    Map (entity names as letters), predicted values, |Z1| (said to be none when all zero: no
+    network ran); marks the predicted goal (x), the true goal (o) and an agent path if given.
     """
     fig, axes = plt.subplots(1, 3, figsize=(12, 4.2))
     draw_map(axes[0], grid, entities)
@@ -62,10 +61,14 @@ def plot_grounding(
 
 
 def relation_title(relation_map: np.ndarray) -> str:
-    """Title the |Z1| panel: a network's is never all zero, so none is the grammar's goal."""
+    """
+    Title the |Z1| panel: a network's is never all zero, so an all-zero one says none ran.
+
+    The grammar placed the goal itself, or the grounding declined before the network.
+    """
     if np.any(relation_map):
         return 'relation map |Z1|'
-    return "relation map |Z1|: none\n(the grammar's goal: no network ran)"
+    return 'relation map |Z1|: none\n(no network ran)'
 
 
 def draw_map(ax, grid: np.ndarray, entities: EntityTable) -> None:
