@@ -13,6 +13,8 @@ the map (TRNet.pair_forward). Both must give the same value map, Z1 and attentio
 gradients; the tiled output head must give the untiled one bit for bit.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from spatial_grounding_ros.core.entities import ISI
@@ -300,7 +302,7 @@ def test_the_shared_caches_serve_training_after_inference():
 @pytest.mark.parametrize('shape', [(64, 65), (70, 90)])
 def test_large_maps_gather_offset_by_offset_as_training_gathers_them_all(shape):
     """Past GATHER_BY_OFFSET_CELLS inference gathers offset by offset: the same Z1, attention."""
-    from spatial_grounding_ros.models.trnet import GATHER_BY_OFFSET_CELLS
+    from spatial_grounding_ros.models.map_cells import GATHER_BY_OFFSET_CELLS
 
     assert shape[0] * shape[1] > GATHER_BY_OFFSET_CELLS
     vocab, grids, tokens = inputs(shape, 12, seed=14)
@@ -312,6 +314,38 @@ def test_large_maps_gather_offset_by_offset_as_training_gathers_them_all(shape):
     assert torch.equal(aux['relation_map'], trained_aux['relation_map'].detach())
     assert torch.equal(aux['attention'], trained_aux['attention'].detach())
     torch.testing.assert_close(values, trained.detach(), **TOLERANCE)
+
+
+def test_kept_map_cells_ground_as_computed_and_each_map_keeps_its_own():
+    """A map's table rows are kept at inference: the same groundings, each map its own."""
+    from spatial_grounding_ros.models import map_cells
+
+    vocab, grids, tokens = inputs((10, 10), 12, seed=17)
+    model = random_model('t-rnet-attn', len(vocab), seed=18, axial=True, far=True)
+    maps = [grids[n:n + 1] for n in range(len(grids))]
+    with torch.inference_mode():
+        code = model.text_code(tokens[:1])
+        map_cells._KEPT.clear()
+        # each map twice, the second from the kept rows: what the maps computed afresh give
+        kept = [model.ground(m, code, True) for m in maps + maps]
+        assert len(map_cells._KEPT) == len(maps)
+        fresh = []
+        for m in maps:
+            map_cells._KEPT.clear()
+            fresh.append(model.ground(m, code, True))
+    for (values, aux), (ref_values, ref_aux) in zip(kept, fresh + fresh):
+        assert torch.equal(values, ref_values)
+        assert torch.equal(aux['relation_map'], ref_aux['relation_map'])
+        assert torch.equal(aux['attention'], ref_aux['attention'])
+    # a table per map (a batch's kinds_per_map) and a forward with gradients keep nothing
+    map_cells._KEPT.clear()
+    with torch.inference_mode():
+        model(grids, tokens)
+    model.ground(maps[1], model.text_code(tokens[:1]))
+    assert not map_cells._KEPT
+    # a kind the table lacks is an error each time, not a kept row
+    with torch.inference_mode(), pytest.raises(ValueError, match='lacks entity kinds'):
+        model.ground(maps[1], dataclasses.replace(code, kinds=code.kinds[:3]))
 
 
 @pytest.mark.parametrize('views', [{}, {'axial': True, 'head_text': True, 'far': True}])

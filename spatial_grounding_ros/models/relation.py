@@ -228,8 +228,10 @@ def kind_table(
         ]
         alpha = score.masked_fill(~mask[:, :, None, None], float('-inf')).softmax(1)
         # the terms mixed per (kind_i, kind_j): (B, Ki, Kj, out)
+        # (the j side's permuted alpha made contiguous first: the same products, but a
+        # strided batch sends the matmul down a per-batch copy path four times slower)
         fixed = alpha.permute(0, 2, 3, 1) @ term_i + (
-            alpha.permute(0, 3, 2, 1) @ term_j
+            alpha.permute(0, 3, 2, 1).contiguous() @ term_j
         ).transpose(1, 2)
         rows = alpha.flatten(2).transpose(1, 2)  # (B, R, L)
         slope = rows @ w1[..., 2 * k]  # (B, R, out): the position term's weights, mixed

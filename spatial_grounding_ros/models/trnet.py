@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import torch
 from torch import nn
-import torch.nn.functional as F
 
 from .config import ModelConfig, neighbour_offsets, relation_param_count, relative_positions
 from .encoders import (
@@ -19,18 +18,14 @@ from .encoders import (
     kind_rows,
     kinds_per_map,
     present_kinds,
-    shifted,
     TextEncoder,
 )
 from .far import FAR_LOG_COST, far_map, FAR_POSITION
 from .head import build_head, outputs
+from .map_cells import map_cells
 from .protocol import Capabilities, EntityRows, RelationCode
 from .relation import cell_pairs, kind_table, pair_relations
 from .traces import traced
-
-# a map of more cells than this is grounded (without gradients) one neighbour offset at a time:
-# on small maps one gather of all offsets costs fewer calls
-GATHER_BY_OFFSET_CELLS = 64 * 64
 
 
 class TRNet(EntityRows, nn.Module):
@@ -231,34 +226,28 @@ class TRNet(EntityRows, nn.Module):
         """Value maps of grids (B, H, W) for a text_code of B instructions (or of 1 for all)."""
         b, h, w = grids.shape
         kinds, relations = code.kinds, code.relations  # (B or 1, Ki * Kj, P)
-        n_rows, p = relations.shape[1:]
-        radius = self.cfg.radius
-        # each pair's (kind_i, kind_j) row, i * Kj + j, with j the off-map row past the border:
-        # one (B, H, W) map of rows per offset
-        n_kinds = kinds.shape[-1]
-        centre = kind_rows(grids, kinds, self.phi.embed.num_embeddings)  # (B, N)
-        around = F.pad(centre.view(b, h, w), (radius,) * 4, value=n_kinds)
-        first = centre.view(b, h, w) * (n_kinds + 1)
-        pairs = [first + neighbour for neighbour in shifted(around, radius)]
+        p = relations.shape[2]
+        # each pair's (kind_i, kind_j) row, i * Kj + j, with j the off-map row past the border
+        cells = map_cells(grids, kinds, self.phi.embed.num_embeddings, self.cfg.radius, p)
         table = relations.flatten(1).expand(b, -1)  # a pair's row * P + its offset
-        if torch.is_grad_enabled() or h * w <= GATHER_BY_OFFSET_CELLS:
+        if cells.index is not None:
             # one gather of all offsets and amax, whose gradient splits among equal maxima
-            pairs = [torch.stack(pairs, -1)]  # (B, H, W, P)
-            index = (pairs[0] * p + torch.arange(p, device=grids.device)).view(b, -1)
-            z1 = table.gather(1, index).view(b, h * w, p).amax(-1).view(b, h, w)
+            z1 = table.gather(1, cells.index).view(b, h * w, p).amax(-1).view(b, h, w)
         else:  # offset by offset: the same maxima without (B, N, P) indices, 4x faster at 512^2
             z1 = None
-            for offset, pair in enumerate(pairs):
+            for offset, pair in enumerate(cells.pairs):
                 r = table.gather(1, (pair * p + offset).view(b, -1))
                 z1 = r if z1 is None else torch.maximum(z1, r, out=z1)
             z1 = z1.view(b, h, w)
-        far = None if code.far is None else self.far_relation(grids, kinds, code.far, centre)
+        far = None
+        if code.far is not None:
+            far = self.far_relation(grids, kinds, code.far, cells.centre)
         values = self.head(z1, code.head.expand(b, -1), far)
         word_attention = None
         if return_aux and code.attention is not None:
             # the mean over the map's pairs: each kind pair's attention times its pair count
-            counts = pair_counts(pairs, n_rows).to(relations.dtype)
-            word_attention = (counts.view(b, 1, n_rows) @ code.attention.expand(b, -1, -1))[
+            counts = cells.counts().to(relations.dtype)
+            word_attention = (counts.view(b, 1, -1) @ code.attention.expand(b, -1, -1))[
                 :, 0
             ] / (p * h * w)
         return outputs(values, z1, word_attention, return_aux)
@@ -275,13 +264,3 @@ class TracedTextCode(nn.Module):
         code = self.model.compute_text_code(tokens)
         fields = (code.kinds, code.relations, code.attention, code.head, code.far)
         return tuple(tokens.new_zeros(0) if x is None else x for x in fields)
-
-
-def pair_counts(pairs: list[torch.Tensor], n_rows: int) -> torch.Tensor:
-    """Return how often each map holds each table row (B * n_rows,), from its pairs' rows."""
-    b = len(pairs[0])
-    counts = 0
-    for pair in pairs:  # (B, H, W) per offset, or (B, H, W, P) all at once
-        maps = torch.arange(b, device=pair.device).view(b, *[1] * (pair.dim() - 1)) * n_rows
-        counts = counts + torch.bincount((pair + maps).flatten(), minlength=b * n_rows)
-    return counts
