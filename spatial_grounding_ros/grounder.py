@@ -228,11 +228,11 @@ class Grounder:
                 self.text_codes.popitem(last=False)
         self.text_codes[model_text] = codes
         if images not in codes:
-            # encoded as a batch of all the images' wordings, so that an image's tokens carry
-            # the same padding whichever images a map takes
-            said = [mirror_instruction(model_text, axes) for axes in IMAGES]
-            tokens = torch.as_tensor(self.vocab.encode_batch(said))
-            codes[images] = self.model.text_code(tokens[[IMAGES.index(a) for a in images]])
+            # a mirror image's wording swaps words one for one (augment.SWAP_TABLES), so every
+            # image's tokens are as long as the words' and carry no padding, whichever images
+            # are encoded together
+            said = [mirror_instruction(model_text, axes) for axes in images]
+            codes[images] = self.model.text_code(torch.as_tensor(self.vocab.encode_batch(said)))
         return codes[images]
 
     # inference mode: no autograd bookkeeping on any tensor, a tenth of a 10x10 map's time

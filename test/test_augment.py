@@ -18,7 +18,10 @@ from spatial_grounding_ros.data.augment import (
     filler_word_ids,
     insert_noise_words,
     mirror,
+    MIRROR_IMAGES,
+    mirror_instruction,
     SWAP_LEFT_RIGHT,
+    SWAP_TABLES,
     SWAP_UP_DOWN,
     swap_words,
     with_mirrors,
@@ -54,6 +57,16 @@ def test_direction_words_swap_with_the_flip():
     )
     # words without a direction are untouched
     assert swap_words('reach the heart', SWAP_UP_DOWN) == 'reach the heart'
+
+
+def test_a_mirror_image_swaps_words_one_for_one():
+    """Each image's wording has as many tokens as the words (the grounder encodes each alone)."""
+    for table in SWAP_TABLES.values():
+        assert all(len(tokenize(a)) == len(tokenize(b)) == 1 for a, b in table.items())
+    for text in ('Two cells left of the westernmost rock.', 'reach the top-most tree, then stop',
+                 'go one north-east of the lower left house', 'the tree at the bottom right'):
+        for axes in MIRROR_IMAGES:
+            assert len(tokenize(mirror_instruction(text, axes))) == len(tokenize(text))
 
 
 def test_with_mirrors_is_four_times_the_data():
