@@ -462,8 +462,10 @@ class Grounder:
         """Return a question's grounding: no goal; the landmark asked of, in words and cell."""
         ref = command.reference
         out = self.no_goal(grid, instruction, command, None)
-        if ref is None or not ref.mentions:
-            return replace(out, answer='I cannot tell which landmark the question asks of')
+        if ref is None or not ref.mentions:  # none named, or one the table lacks (its reason)
+            code, _, word = ((ref and ref.reason) or '').partition(': ')
+            unknown = code == 'unknown-landmark' and f'no landmark I know of is called "{word}"'
+            return replace(out, answer=unknown or 'I cannot tell which landmark is asked of')
         kind = ref.mentions[0].kind
         name = said(self.entities, kind)
         cells = np.argwhere(grid == kind)
@@ -478,17 +480,8 @@ class Grounder:
     def no_goal(self, grid: np.ndarray, instruction: str, command: Command, reason):
         """Return a grounding that sends no goal: a stop, a question, a decline."""
         zeros = np.zeros(grid.shape, dtype=np.float32)
-        return Grounding(
-            instruction,
-            zeros,
-            zeros,
-            None,
-            tokenize(instruction),
-            None,
-            [],
-            reason=reason,
-            intent=command.intent,
-        )
+        return Grounding(instruction, zeros, zeros, None, tokenize(instruction), None, [],
+                         reason=reason, intent=command.intent)
 
     def judge(self, values: np.ndarray):
         """Return the best cell, its calibrated probability, and the next best with theirs."""

@@ -108,6 +108,12 @@ def test_a_question_answers_in_words_and_cell(office):
     assert where.goal is None and where.referent == (3, 3) and 'fridge' in where.answer
     missing = office.ground(grid, 'is there a printer?')
     assert missing.goal is None and missing.referent is None and 'no printer' in missing.answer
+    # a landmark no kind of the table is: said as such, not "which landmark?"
+    for text, word in (('where is the piano?', 'piano'), ('where is the oven?', 'oven')):
+        unknown = office.ground(grid, text)
+        assert unknown.intent == 'question' and unknown.goal is None
+        assert unknown.answer == f'no landmark I know of is called "{word}"'
+    assert 'which landmark' in office.ground(grid, 'where am I?').answer
 
 
 def test_a_sequence_grounds_each_step_in_order(office):
@@ -364,6 +370,26 @@ def test_only_the_referents_slot_can_be_unknown(office):
 def test_the_models_own_names_are_no_landmarks_of_another_table(office, text, word):
     result = office.ground(office_map(office), text)
     assert result.goal is None and result.reason == f'unknown-landmark: {word}'
+
+
+@pytest.mark.parametrize(
+    'text, word',
+    [
+        ('go to the oven', 'oven'),  # one letter from "over"
+        ('please go near the oven', 'oven'),
+        ('go to the even', 'even'),  # from "seven"
+        ('take me to a tower', 'tower'),  # from "lower"
+    ],
+)
+def test_a_name_is_no_typo_of_a_relation_word_or_a_count(office, text, word):
+    """Where a landmark's name goes, a word is read as a side or a cell at most."""
+    result = office.ground(office_map(office), text)
+    assert result.goal is None and result.reason == f'unknown-landmark: {word}'
+
+
+def test_a_misspelt_side_where_a_name_goes_is_the_side(office):
+    assert office.ground(office_map(office), 'go to the lfet of the sofa').goal == (8, 5)
+    assert office.ground(office_map(office), 'one cell to the rigth of the sofa').goal == (8, 7)
 
 
 def test_a_common_english_word_is_no_typo_of_a_name(office):

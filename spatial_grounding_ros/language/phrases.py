@@ -19,7 +19,7 @@ import re
 from rapidfuzz import process
 from rapidfuzz.distance import OSA
 
-from .checks import DIRECTIONS, EXTREME_SIDES, NUMBERS
+from .checks import ARTICLES, CLAUSES, DIRECTIONS, EXTREME_SIDES, NUMBERS, PHRASE_ENDS
 from .lexicon import RELATION_WORDS
 from .places import UNIT_WORDS
 from .vocabulary import GO_VERBS, LENGTH_UNITS
@@ -32,6 +32,18 @@ SPELLING_TARGETS = tuple(
         set(DIRECTIONS) | set(EXTREME_SIDES) | {w for w in NUMBERS if w.isalpha()}
         | set(UNIT_WORDS) | set(LENGTH_UNITS) | RELATION_WORDS
         | set('closest nearest farthest furthest between next beside cell square'.split())
+    )
+)
+
+# where a landmark's name goes (after an article, ending its phrase: "go to the oven"), only
+# a side or a cell can end the place said ("the lfet of the sofa": the left), so a misspelt
+# word there is read only as one of those; no relation word or count ends a phrase ("the
+# oven" is no "the over", "the even" no "the seven"): it stays a name the map may lack
+NAME_SLOT_TARGETS = tuple(
+    sorted(
+        {'left', 'right', 'top', 'bottom', 'north', 'south', 'east', 'west', 'northeast',
+         'northwest', 'southeast', 'southwest', 'cell', 'cells', 'square', 'squares', 'space',
+         'spaces', 'spot', 'spots', 'tile', 'tiles'}
     )
 )
 
@@ -87,6 +99,19 @@ def sentences(text: str) -> list[str]:
 
 # a count's words: what a misspelt word before a unit ("tow cells") is
 COUNT_WORDS = tuple(sorted(w for w in NUMBERS if w.isalpha()))
+PLURAL_UNITS = frozenset(u for u in UNIT_WORDS if u.endswith('s'))  # "two cells", not "a cell"
+
+
+def spelling_targets(words: list[str], i: int) -> tuple[str, ...]:
+    """Return the words that words[i], misspelt, may be read as, by where it stands."""
+    after = words[i + 1] if i + 1 < len(words) else None
+    # before units it is a count: "tow cells" (not "top"); before one unit ("um tile") it is
+    # none, as one cell's count is a word known ("a", "one")
+    if after in PLURAL_UNITS:
+        return COUNT_WORDS
+    if i and words[i - 1] in ARTICLES and (after is None or after in CLAUSES | PHRASE_ENDS):
+        return NAME_SLOT_TARGETS
+    return SPELLING_TARGETS
 
 
 @functools.lru_cache(maxsize=4096)

@@ -56,7 +56,9 @@ from .clauses import (
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
-from .phrases import COUNT_WORDS, find_phrase, phrase_at, sentences, spelling, texted
+from .phrases import (
+    find_phrase, phrase_at, PLURAL_UNITS, sentences, spelling, spelling_targets, texted
+)
 from .places import Place, PLACE_WORDS, UNIT_WORDS
 from .steps import steps as split_steps
 from .units import digits, in_cells, LEARNED_COUNT, offsets
@@ -101,7 +103,6 @@ PATH_ENDS = (
 )
 
 DIRECTION_ENDS = frozenset('of from the a an to'.split())  # after a direction: "two left of"
-PLURAL_UNITS = frozenset(u for u in UNIT_WORDS if u.endswith('s'))  # "two cells", not "a cell"
 
 
 def is_slot(word: str) -> bool:
@@ -303,9 +304,10 @@ class Reader:
         ):
             return Command(text, 'stop', notes=notes)
         negation = self.negated(words)
-        if question:
-            steps = (self.reference(words, cell_size),) if mentions else ()
-            return Command(text, 'question', steps, notes=notes)
+        if question:  # of a landmark the table has, or of one it lacks ("where is the piano?")
+            ref = self.reference(words, cell_size)
+            asked = mentions or (ref.reason or '').startswith('unknown-landmark')
+            return Command(text, 'question', (ref,) if asked else (), notes=notes)
         if negation is not None:  # "don't go to the fridge, go to the sofa": the sofa
             kept = beside_negation(words, negation, self.lexicon.mentions)
             if kept is None:
@@ -402,10 +404,7 @@ class Reader:
             if w in self.known or w.isdigit() or any(m.start <= i < m.end for m in mentions):
                 out.append(w)
                 continue
-            # before units it is a count: "tow cells" (not "top"); before one unit ("um tile")
-            # it is none, as one cell's count is a word known ("a", "one")
-            counted = words[i + 1:i + 2] in ([u] for u in PLURAL_UNITS)
-            meant = spelling(w, COUNT_WORDS) if counted else spelling(w)
+            meant = spelling(w, spelling_targets(words, i))
             if meant is not None:
                 spelled.append((w, meant))
             out.append(meant or w)
