@@ -59,10 +59,11 @@ def map_cells(grids: torch.Tensor, kinds: torch.Tensor, n_kinds: int, radius: in
     Return the MapCells of grids (B, H, W) in a table over `kinds` (K,) or (B, K).
 
     Kinds_j are `kinds` and the off-map kind (row K, past the border); `n_kinds`: the entity
-    table's rows; `p` the table's offsets. Kept (MAPS_KEPT) at inference for one table over
-    all maps on maps that gather at once: the same tensors as computed, read only.
+    table's rows; `p` the table's offsets. Kept (MAPS_KEPT, keyed by the cells) at inference,
+    on the CPU, for one table over all maps on maps that gather at once: the same tensors as
+    computed, read only.
     """
-    if not (torch.is_inference_mode_enabled() and kinds.dim() == 1
+    if not (torch.is_inference_mode_enabled() and kinds.dim() == 1 and grids.device.type == 'cpu'
             and grids.shape[1] * grids.shape[2] <= GATHER_BY_OFFSET_CELLS):
         return compute_map_cells(grids, kinds, n_kinds, radius, p)
     key = (grids.shape, grids.numpy().tobytes(), kinds.numpy().tobytes(), n_kinds, radius, p)
