@@ -29,12 +29,13 @@ import torch
 from .core.confidence import certainty, judged, mass_around, probability
 from .core.entities import EntityTable, PUDDLEWORLD_NONUNIQUE, PUDDLEWORLD_UNIQUE
 from .core.footprints import nearest_cell, reduce_footprints
-from .core.grounding import Grounding, REASONS  # noqa: F401 (REASONS: the API's)
+from .core.grounding import Grounding, nearest_option, REASONS  # noqa: F401 (REASONS: API)
 from .core.text import tokenize
 from .data.augment import MIRROR_IMAGES, mirror_instruction
 from .language import compose
 from .language.approach import approach_for
 from .language.checks import map_reason, named_sides, place_offsets, said
+from .language.clauses import NEAREST_OF
 from .language.compose import plain_row_col, renamed, shifted
 from .language.lexicon import Lexicon, Mention, Translation
 from .language.places import composed, learned, Place, surface
@@ -261,7 +262,7 @@ class Grounder:
         if command.intent in ('go', 'sequence'):
             steps = [self.ground_reference(grid, instruction, ref, robot_cell, size)
                      for ref in command.steps]
-            return self.in_order(instruction, command, steps)
+            return self.in_order(instruction, command, steps, robot_cell)
         if command.intent == 'question':
             return self.answered(grid, instruction, command)
         return self.no_goal(grid, instruction, command, command.reason)
@@ -440,11 +441,11 @@ class Grounder:
             model_grid = reduce_footprints(model_grid, sides, self.model_entities.obstacles[0])
         return model_grid, names, mentions
 
-    def in_order(self, instruction: str, command: Command, steps: list[Grounding]) -> Grounding:
-        """Return a go's grounding, or a sequence's: its first step's, with every step."""
+    def in_order(self, instruction, command: Command, steps: list[Grounding], robot_cell=None):
+        """Return a go's grounding (of a choice: the nearest), or a sequence's, with each step."""
         first = steps[0]
         if command.intent == 'go':
-            return first
+            return nearest_option(steps, robot_cell) if NEAREST_OF in command.notes else first
         declined = next(((k, g) for k, g in enumerate(steps) if g.goal is None), None)
         reason = None if declined is None else f'{declined[1].reason} (step {declined[0] + 1})'
         return replace(

@@ -201,6 +201,49 @@ def test_which_of_a_kind_said_after_it_or_left_to_the_robot(office):
 
 
 @pytest.mark.parametrize(
+    'text',
+    [
+        'go to the fridge or the desk, whichever is closer',
+        'go to the closer of the fridge and the desk',
+        'head to the nearest of the desk and the fridge',
+        'whichever is nearer to you, the fridge or the desk',
+    ],
+)
+def test_a_choice_left_to_nearness_is_the_landmark_nearest_the_robot(office, text):
+    """Fridge (3, 3), desk (5, 9): from (10, 10) the desk, from (3, 5) the fridge."""
+    grid = office_map(office)
+    assert lands(office.ground(grid, text, robot_cell=(10, 10)), beside((5, 9)))
+    assert lands(office.ground(grid, text, robot_cell=(3, 5)), beside((3, 3)))
+    unknown = office.ground(grid, text)  # nearer to what: the robot's cell is not known
+    assert unknown.goal is None and unknown.reason.startswith('ambiguous: "closer"')
+
+
+def test_options_as_near_as_each_other_decline():
+    from spatial_grounding_ros.core.grounding import Grounding, nearest_option
+
+    zeros = np.zeros((3, 3), dtype=np.float32)
+    fridge, desk = (Grounding('x', zeros, zeros, goal, [], None, []) for goal in ((0, 0), (2, 2)))
+    tie = nearest_option([fridge, desk], (1, 1))
+    assert tie.goal is None and tie.reason.startswith('ambiguous: the places offered are as near')
+    assert nearest_option([fridge, desk], (0, 1)) is fridge
+    assert nearest_option([fridge, desk], (2, 1)) is desk
+
+
+def test_a_choice_by_nearness_of_a_kind_or_a_missing_landmark(office):
+    grid = office_map(office)  # chairs at (2, 8) and (9, 2)
+    chair = office.ground(grid, 'the chair or the fridge, whichever is closer', robot_cell=(9, 9))
+    assert lands(chair, beside((9, 2)))
+    # a landmark the map lacks is no option; one the table lacks is a word not understood
+    door = office.ground(grid, 'the door or the desk, whichever is nearer', robot_cell=(1, 1))
+    assert lands(door, beside((5, 9)))
+    # no choice left to nearness: offered, declined; listed, a sequence; a place, the network's
+    offered = office.ground(grid, 'go to the fridge or the desk', robot_cell=(10, 10))
+    assert offered.goal is None and offered.reason.startswith('ambiguous: one place or another')
+    listed = office.ground(grid, 'go to the fridge and the desk', robot_cell=(10, 10))
+    assert listed.intent == 'sequence'
+
+
+@pytest.mark.parametrize(
     'text, referents',
     [
         ('go to the fridge, grab a drink, and bring it to the sofa', [(3, 3), (8, 6)]),

@@ -8,7 +8,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+import math
 
 import numpy as np
 
@@ -68,3 +69,25 @@ class Grounding:
     def reason_code(self) -> str | None:
         """Return the reason's code alone ('referent-missing'), or None."""
         return None if self.reason is None else self.reason.split(':')[0]
+
+
+def nearest_option(options: list[Grounding], robot_cell) -> Grounding:
+    """
+    Return of a choice left to nearness ("whichever is closer") the option nearest the robot.
+
+    An option whose landmark the map lacks is none; any other decline declines the choice (the
+    declined one might have been the nearer). Without the robot's cell, or with two goals as
+    near as each other, the choice declines as ambiguous.
+    """
+    left = [g for g in options if g.reason_code != 'referent-missing'] or options[:1]
+    declined = next((g for g in left if g.goal is None), None)
+    if declined is not None:
+        return declined
+    if robot_cell is None:
+        return replace(left[0], goal=None, reason='ambiguous: "closer" is said of the robot, '
+                       'whose cell is not known')
+    far = [math.dist(g.goal, robot_cell) for g in left]
+    if far.count(min(far)) > 1:
+        return replace(left[0], goal=None, reason='ambiguous: the places offered are as near '
+                       'as each other')
+    return left[far.index(min(far))]

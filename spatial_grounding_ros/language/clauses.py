@@ -111,6 +111,12 @@ VISIT_VERBS = GO_VERBS | frozenset('swing drop pop'.split())
 # between two landmarks offered as a choice ("the fridge or maybe the couch")
 CHOICE_GAP = frozenset('or the a an to maybe perhaps possibly else'.split())
 
+# a choice of landmarks left to nearness to the robot ("whichever is closer", "the nearer of"):
+# its words besides going ones, and the note a reading of one carries (Command.notes)
+NEARER = frozenset('closer nearer closest nearest'.split())
+NEARNESS_CHOICE = NEARER | frozenset('whichever which is one of or you'.split())
+NEAREST_OF = 'nearest-of'
+
 
 def without_rejected(words: list[str], mentions) -> list[str]:
     """
@@ -354,3 +360,26 @@ def choice(words: list[str], mentions) -> bool:
         if 'or' in gap and set(gap) <= CHOICE_GAP and a.kind != b.kind:
             return bare(words[:a.start], [], {'either'})
     return False
+
+
+def nearest_of(words: list[str], mentions) -> list[list[str]] | None:
+    """
+    Return the landmarks of a choice left to nearness, each as going to its nearest, or None.
+
+    "the fridge or the desk, whichever is closer", "the closer of the fridge and the desk",
+    "whichever is nearer, the fridge or the sofa": landmarks of different kinds with only
+    "and" or "or" between them, and besides going words a choice by nearness: "whichever",
+    or "closer of". "The cell closest to the fridge and the desk" is a place, not a choice.
+    """
+    found = mentions(words)
+    if len(found) < 2 or len({m.kind for m in found}) < len(found):
+        return None
+    gaps = {w for a, b in zip(found, found[1:]) for w in words[a.end:b.start]}
+    by_nearness = 'whichever' in words or any(
+        w in NEARER and words[k + 1:k + 2] == ['of'] for k, w in enumerate(words)
+    )
+    if not (gaps <= CHOICE_GAP | {'and'} and by_nearness and set(words) & NEARER):
+        return None
+    if not bare(words, found, NEARNESS_CHOICE):
+        return None
+    return [['go', 'to', 'the', 'nearest', *words[m.start:m.end]] for m in found]

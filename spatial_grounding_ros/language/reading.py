@@ -37,22 +37,12 @@ from dataclasses import dataclass, field, replace
 import functools
 
 from .checks import (
-    ARTICLES,
-    BEFORE_A_NAME,
-    CLAUSES,
-    DIRECTIONS,
-    kindless_pick,
-    MAP_WORDS,
-    moves,
-    NUMBERS,
-    opposite_sides,
-    PHRASE_ENDS,
-    QUALIFIERS,
-    relation_reason,
+    ARTICLES, BEFORE_A_NAME, CLAUSES, DIRECTIONS, kindless_pick, MAP_WORDS, moves, NUMBERS,
+    opposite_sides, PHRASE_ENDS, QUALIFIERS, relation_reason,
 )
 from .clauses import (
-    beside_negation, choice, condition, fetched, placed, PLACING_VERBS, without_action,
-    without_courtesies, without_fillers, without_rejected, without_return,
+    beside_negation, choice, condition, fetched, NEAREST_OF, nearest_of, placed, PLACING_VERBS,
+    without_action, without_courtesies, without_fillers, without_rejected, without_return,
 )
 from .grammar import parse
 from .lexicon import COMMON_WORDS, Lexicon, Mention
@@ -156,7 +146,9 @@ class Command:
 
     text: str
     intent: str  # one of INTENTS
-    steps: tuple[Reference, ...] = ()  # go: one; sequence: several; question: its landmark
+    # go: one (a choice left to nearness, NEAREST_OF: each landmark); sequence: several in
+    # order; question: its landmark
+    steps: tuple[Reference, ...] = ()
     reason: str | None = None  # negation, unsupported: why no goal is sent
     notes: tuple[str, ...] = field(default=())  # what the reading did ('corrected', ...)
 
@@ -349,6 +341,10 @@ class Reader:
                 what = found[0][1] if found else ' '.join(content[:4])
                 return Command(text, 'unsupported', (), f'unsupported: "{what}" names no '
                                'landmark or cell on the map', notes)
+        options = nearest_of(words, self.lexicon.mentions)  # "..., whichever is closer"
+        if options:  # each a step; the grounder takes the one nearest the robot
+            steps = tuple(self.reference(o, cell_size) for o in options)
+            return Command(text, 'go', steps, None, (*notes, NEAREST_OF))
         if choice(words, self.lexicon.mentions):  # "the fridge or the couch"
             ref = self.reference(words, cell_size)
             return Command(text, 'go', (replace(ref, reason='ambiguous: one place or another '
