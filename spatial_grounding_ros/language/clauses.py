@@ -371,15 +371,15 @@ def nearest_of(words: list[str], mentions) -> list[list[str]] | None:
     "and" or "or" between them, and besides going words a choice by nearness: "whichever",
     or "closer of". "The cell closest to the fridge and the desk" is a place, not a choice.
     """
+    by_nearness = 'whichever' in words or any(
+        w in NEARER and words[k + 1:k + 2] == ['of'] for k, w in enumerate(words)
+    )
+    if not (by_nearness and set(words) & NEARER):
+        return None
     found = mentions(words)
     if len(found) < 2 or len({m.kind for m in found}) < len(found):
         return None
     gaps = {w for a, b in zip(found, found[1:]) for w in words[a.end:b.start]}
-    by_nearness = 'whichever' in words or any(
-        w in NEARER and words[k + 1:k + 2] == ['of'] for k, w in enumerate(words)
-    )
-    if not (gaps <= CHOICE_GAP | {'and'} and by_nearness and set(words) & NEARER):
-        return None
-    if not bare(words, found, NEARNESS_CHOICE):
+    if not (gaps <= CHOICE_GAP | {'and'} and bare(words, found, NEARNESS_CHOICE)):
         return None
     return [['go', 'to', 'the', 'nearest', *words[m.start:m.end]] for m in found]
