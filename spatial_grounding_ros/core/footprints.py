@@ -150,3 +150,23 @@ def nearest_cell(grid: np.ndarray, kinds: list[int], cell: tuple[int, int]):
         return None
     nearest = where[((where - np.asarray(cell)) ** 2).sum(1).argmin()]
     return int(nearest[0]), int(nearest[1])
+
+
+# a landmark picked by its distance from the robot, whose cell is not known
+ROBOT_UNKNOWN = 'ambiguous: said of the robot, whose cell is not known'
+
+
+def by_distance(d, name: str, anchor: str, pick: str):
+    """
+    Return (the index of the landmark nearest or farthest, None) or (None, why not).
+
+    `d`: each landmark's distance from the anchor, centre to centre (Euclidean, as Janner's
+    worlds say closest); `pick`: 'closest' or 'farthest'; a tie is declined.
+    """
+    d = np.asarray(d)
+    best = d.min() if pick == 'closest' else d.max()
+    ties = int(np.isclose(d, best).sum())
+    if ties > 1:
+        word = 'nearest' if pick == 'closest' else 'farthest'
+        return None, f'ambiguous: {ties} {name}s tie as {word} from the {anchor}'
+    return int(np.flatnonzero(np.isclose(d, best))[0]), None

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from .footprints import by_distance, ROBOT_UNKNOWN
+
 # the reasons a grounding may decline with (language/checks.py has the structural ones)
 REASONS = (
     'referent-missing',
@@ -77,17 +79,14 @@ def nearest_option(options: list[Grounding], robot_cell) -> Grounding:
 
     An option whose landmark the map lacks is none; any other decline declines the choice (the
     declined one might have been the nearer). Without the robot's cell, or with two goals as
-    near as each other, the choice declines as ambiguous.
+    near as each other (footprints.by_distance), the choice declines as ambiguous.
     """
     left = [g for g in options if g.reason_code != 'referent-missing'] or options[:1]
     declined = next((g for g in left if g.goal is None), None)
     if declined is not None:
         return declined
     if robot_cell is None:
-        return replace(left[0], goal=None, reason='ambiguous: "closer" is said of the robot, '
-                       'whose cell is not known')
+        return replace(left[0], goal=None, reason=ROBOT_UNKNOWN)
     far = [math.dist(g.goal, robot_cell) for g in left]
-    if far.count(min(far)) > 1:
-        return replace(left[0], goal=None, reason='ambiguous: the places offered are as near '
-                       'as each other')
-    return left[far.index(min(far))]
+    i, reason = by_distance(far, 'place', 'robot', 'closest')
+    return left[i] if reason is None else replace(left[0], goal=None, reason=reason)

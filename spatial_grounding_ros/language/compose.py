@@ -23,7 +23,7 @@ import numpy as np
 
 from .places import Landmark, ORDINAL_WORDS, PICKED, Place, ROBOT, side_words, SIDES
 from ..core.entities import EntityTable
-from ..core.footprints import anchor, footprints, side_of
+from ..core.footprints import anchor, by_distance, footprints, ROBOT_UNKNOWN, side_of
 
 Cell = tuple[int, int]
 # the network's grounding of a place it learned: (value map, its aux, its words, the rest of
@@ -202,7 +202,7 @@ class Locator:
         """
         if landmark.name == ROBOT:
             if self.robot_cell is None:
-                return [], 1.0, [], 'ambiguous: said of the robot, whose cell is not known'
+                return [], 1.0, [], ROBOT_UNKNOWN
             return [np.array([self.robot_cell])], 1.0, [], None
         found = instances(self.grid, self.kinds[landmark.name], self.table.has_footprints)
         if landmark.pick is None and len(found) > 1:
@@ -303,22 +303,6 @@ def ordinal(found: list[np.ndarray], landmark: Landmark, name: str):
     if keys.count(key) > 1:
         return None, f'ambiguous: {keys.count(key)} {name}s tie as the {said}'
     return [edge_key(c, landmark.side) for c in found].index(key), None
-
-
-def by_distance(d, name: str, anchor: str, pick: str):
-    """
-    Return (the index of the landmark nearest or farthest, None) or (None, why not).
-
-    `d`: each landmark's distance from the anchor, centre to centre (Euclidean, as Janner's
-    worlds say closest); `pick`: 'closest' or 'farthest'; a tie is declined.
-    """
-    d = np.asarray(d)
-    best = d.min() if pick == 'closest' else d.max()
-    ties = int(np.isclose(d, best).sum())
-    if ties > 1:
-        word = 'nearest' if pick == 'closest' else 'farthest'
-        return None, f'ambiguous: {ties} {name}s tie as {word} from the {anchor}'
-    return int(np.flatnonzero(np.isclose(d, best))[0]), None
 
 
 def between(place: Place, a: list, b: list, grid: np.ndarray, kinds: dict, cell_size=None):

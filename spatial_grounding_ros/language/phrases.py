@@ -41,9 +41,8 @@ SPELLING_TARGETS = tuple(
 # oven" is no "the over", "the even" no "the seven"): it stays a name the map may lack
 NAME_SLOT_TARGETS = tuple(
     sorted(
-        {'left', 'right', 'top', 'bottom', 'north', 'south', 'east', 'west', 'northeast',
-         'northwest', 'southeast', 'southwest', 'cell', 'cells', 'square', 'squares', 'space',
-         'spaces', 'spot', 'spots', 'tile', 'tiles'}
+        set('left right top bottom north south east west northeast northwest southeast '
+            'southwest'.split()) | set(UNIT_WORDS)
     )
 )
 
